@@ -1,0 +1,41 @@
+"""The ``riverbridge`` command: one entry point, one subcommand per process.
+
+This module is the composition root: it is the only place that knows every part, and it
+imports a part only when its subcommand runs, so ``riverbridge bridge`` never loads Embree
+or scikit-learn.
+"""
+
+from __future__ import annotations
+
+import importlib
+import sys
+
+# subcommand -> (module with ``main(argv) -> int``, one-line help)
+SUBCOMMANDS: dict[str, tuple[str, str]] = {
+    "bridge": ("bridge.cli", "run the rosbridge v2 websocket server"),
+    "nav": ("navigation.cli", "run the navigation service against a bridge"),
+}
+
+
+def _usage() -> str:
+    lines = ["usage: riverbridge <command> [options]", "", "commands:"]
+    lines += [f"  {name:<8} {help_text}" for name, (_, help_text) in SUBCOMMANDS.items()]
+    lines += ["", "Run 'riverbridge <command> --help' for the options of a command."]
+    return "\n".join(lines)
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = list(sys.argv[1:] if argv is None else argv)
+    if not args or args[0] in {"-h", "--help"}:
+        print(_usage())
+        return 0 if args else 2
+    command, rest = args[0], args[1:]
+    if command not in SUBCOMMANDS:
+        print(f"riverbridge: unknown command {command!r}\n\n{_usage()}", file=sys.stderr)
+        return 2
+    module = importlib.import_module(SUBCOMMANDS[command][0])
+    return int(module.main(rest))
+
+
+if __name__ == "__main__":
+    sys.exit(main())
