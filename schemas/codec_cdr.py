@@ -1,0 +1,128 @@
+"""CDR (the ROS 2 wire format, for ``cbor-raw`` and DDS) through rosbags' generated codecs.
+
+Canonical dict <-> rosbags message object is the only code here: ``bytes`` become uint8
+array views, numeric sequences pass as they are, fixed arrays become small ndarrays; the
+serialization itself is rosbags' ``serialize_cdr``/``deserialize_cdr``. The bytes include
+the 4-byte encapsulation header (``00 01 00 00``, little-endian CDR).
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any, cast
+
+import numpy as np
+
+from schemas import specs
+from schemas.errors import DecodeError, EncodeError
+from schemas.specs import FieldSpec, MessageSpec
+
+if TYPE_CHECKING:
+    from schemas.registry import TypeRegistry
+
+
+# -- canonical -> rosbags ---------------------------------------------------------------------
+
+
+def _to_object(classes: Any, spec: MessageSpec, msg: dict) -> Any:
+    values = {}
+    for field in spec.fields:
+        values[field.name] = _TO_ROSBAGS[field.category](classes, field, msg[field.name])
+    return classes[spec.name](**values)
+
+
+def _same(classes: Any, field: FieldSpec, value: Any) -> Any:
+    return value
+
+
+def _octet(classes: Any, field: FieldSpec, value: int) -> int:
+    # rosbags packs a scalar ``byte`` as a signed char; ROS 2 octets are 0..255, same bits.
+    return value - 256 if value > 127 and field.base == "byte" else value
+
+
+def _bytes_to_array(classes: Any, field: FieldSpec, value: bytes) -> np.ndarray:
+    return np.frombuffer(value, dtype=np.uint8)
+
+
+def _contiguous(classes: Any, field: FieldSpec, value: np.ndarray) -> np.ndarray:
+    return np.ascontiguousarray(value, dtype=field.dtype)
+
+
+def _bools(classes: Any, field: FieldSpec, value: list) -> np.ndarray:
+    return np.array(value, dtype=np.bool_)
+
+
+def _nested(classes: Any, field: FieldSpec, value: dict) -> Any:
+    return _to_object(classes, cast(MessageSpec, field.message), value)
+
+
+def _nested_list(classes: Any, field: FieldSpec, value: list) -> list:
+    spec = cast(MessageSpec, field.message)
+    return [_to_object(classes, spec, item) for item in value]
+
+
+_TO_ROSBAGS = {
+    specs.BOOL: _same,
+    specs.INT: _octet,
+    specs.FLOAT: _same,
+    specs.STRING: _same,
+    specs.MESSAGE: _nested,
+    specs.BYTES: _bytes_to_array,
+    specs.NUMERIC_SEQUENCE: _contiguous,
+    specs.NUMERIC_FIXED: _contiguous,
+    specs.BOOL_ARRAY: _bools,
+    specs.STRING_ARRAY: _same,
+    specs.MESSAGE_ARRAY: _nested_list,
+}
+
+
+# -- rosbags -> canonical ---------------------------------------------------------------------
+
+
+def _to_canonical(spec: MessageSpec, obj: Any) -> dict:
+    return {
+        field.name: _FROM_ROSBAGS[field.category](field, getattr(obj, field.name))
+        for field in spec.fields
+    }
+
+
+def _exact_array(field: FieldSpec, value: np.ndarray) -> np.ndarray:
+    return value if value.dtype == field.dtype else value.astype(field.dtype)
+
+
+_FROM_ROSBAGS = {
+    specs.BOOL: lambda field, value: bool(value),
+    specs.INT: lambda field, value: int(value) & 0xFF if field.base == "byte" else int(value),
+    specs.FLOAT: lambda field, value: float(value),
+    specs.STRING: lambda field, value: str(value),
+    specs.MESSAGE: lambda field, value: _to_canonical(field.message, value),
+    specs.BYTES: lambda field, value: np.asarray(value, dtype=np.uint8).tobytes(),
+    specs.NUMERIC_SEQUENCE: _exact_array,
+    specs.NUMERIC_FIXED: lambda field, value: np.asarray(value).tolist(),
+    specs.BOOL_ARRAY: lambda field, value: [bool(item) for item in value],
+    specs.STRING_ARRAY: lambda field, value: list(value),
+    specs.MESSAGE_ARRAY: lambda field, value: [_to_canonical(field.message, v) for v in value],
+}
+
+
+# -- public -----------------------------------------------------------------------------------
+
+
+def to_cdr(registry: TypeRegistry, type_name: str, msg: dict) -> bytes:
+    """Serialize a canonical message to CDR, 4-byte encapsulation header included."""
+    spec = registry.message(type_name)
+    store = registry.typestore
+    try:
+        obj = _to_object(store.types, spec, msg)
+        return bytes(store.serialize_cdr(obj, spec.name))
+    except (KeyError, TypeError, ValueError, AttributeError, OverflowError) as exc:
+        raise EncodeError(f"cannot encode {spec.name} as CDR: {exc!r}") from None
+
+
+def from_cdr(registry: TypeRegistry, type_name: str, data: bytes) -> dict:
+    """Parse CDR bytes (with header) into the canonical message of ``type_name``."""
+    spec = registry.message(type_name)
+    try:
+        obj = registry.typestore.deserialize_cdr(data, spec.name)
+    except Exception as exc:  # rosbags raises assorted errors on short or corrupt data
+        raise DecodeError(f"invalid CDR for {spec.name}: {exc!r}") from None
+    return _to_canonical(spec, obj)

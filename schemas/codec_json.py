@@ -1,0 +1,94 @@
+"""JSON text frames: orjson out (ASCII-safe, bytes as base64, NaN as null), lenient in.
+
+rosbridge writes ``\\uXXXX`` escapes (ROS# decodes frames as ASCII) and ``null`` for NaN and
+±Inf; roslibpy sends bare ``NaN``/``Infinity`` tokens, which orjson rejects, so decoding
+falls back to the standard library parser for exactly those frames.
+"""
+
+from __future__ import annotations
+
+import base64
+import json
+import re
+from typing import Any
+
+import numpy as np
+import orjson
+
+from schemas.errors import DecodeError, EncodeError
+
+_OPTIONS = orjson.OPT_SERIALIZE_NUMPY
+_NON_ASCII = re.compile(r"[^\x00-\x7f]")
+
+
+def _default(obj: Any) -> Any:
+    """Types orjson does not write itself."""
+    if isinstance(obj, bytes | bytearray | memoryview):
+        return base64.b64encode(obj).decode("ascii")
+    if isinstance(obj, np.ndarray):
+        if obj.dtype.kind in "iufb" and obj.dtype.itemsize <= 8:
+            # orjson takes only C-contiguous, native-endian arrays of the usual dtypes.
+            return np.ascontiguousarray(obj, dtype=obj.dtype.newbyteorder("="))
+        return obj.tolist()
+    if isinstance(obj, np.generic):
+        return obj.item()
+    raise TypeError(f"cannot encode {type(obj).__name__} as JSON")
+
+
+def _escape(match: re.Match) -> str:
+    code = ord(match.group())
+    if code < 0x10000:
+        return f"\\u{code:04x}"
+    code -= 0x10000
+    return f"\\u{0xD800 + (code >> 10):04x}\\u{0xDC00 + (code & 0x3FF):04x}"
+
+
+def _to_ascii(data: bytes) -> bytes:
+    """Escape non-ASCII characters as JSON ``\\uXXXX`` (surrogate pairs above U+FFFF).
+
+    JSON puts non-ASCII characters only inside strings, so a plain substitution is safe.
+    """
+    return _NON_ASCII.sub(_escape, data.decode("utf-8")).encode("ascii")
+
+
+def _native_arrays(obj: Any) -> Any:
+    """Copy of ``obj`` with every ndarray made C-contiguous and native-endian.
+
+    orjson raises on other arrays instead of calling ``default``; canonical messages never
+    hold them, so this walk runs only after such a failure.
+    """
+    if isinstance(obj, np.ndarray):
+        return _default(obj)
+    if isinstance(obj, dict):
+        return {key: _native_arrays(value) for key, value in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [_native_arrays(value) for value in obj]
+    return obj
+
+
+def dumps(obj: Any) -> bytes:
+    """Serialize to compact, pure-ASCII JSON; ``bytes`` -> base64, NaN/±Inf -> ``null``."""
+    try:
+        out = orjson.dumps(obj, default=_default, option=_OPTIONS)
+    except orjson.JSONEncodeError:
+        try:
+            out = orjson.dumps(_native_arrays(obj), default=_default, option=_OPTIONS)
+        except orjson.JSONEncodeError as exc:
+            raise EncodeError(f"cannot encode as JSON: {exc}") from None
+    return out if out.isascii() else _to_ascii(out)
+
+
+def loads(data: bytes | bytearray | memoryview | str) -> Any:
+    """Parse JSON text; accepts ``NaN``, ``Infinity`` and ``-Infinity`` tokens.
+
+    Raises :class:`DecodeError` for anything that is not JSON.
+    """
+    try:
+        return orjson.loads(data)
+    except orjson.JSONDecodeError:
+        pass
+    try:
+        text = data if isinstance(data, str) else bytes(data).decode("utf-8")
+        return json.loads(text)
+    except (UnicodeDecodeError, ValueError, RecursionError) as exc:
+        raise DecodeError(f"invalid JSON: {exc}") from None

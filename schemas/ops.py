@@ -1,0 +1,331 @@
+"""Every rosbridge v2 operation as a pydantic model, validated once at the edge.
+
+Field rules follow the protocol reference §2. Models allow extra keys (clients send
+op-specific extras such as ``fragment_size`` anywhere; rosbridge ignores them) and are
+frozen. Payloads (``msg``, ``args``, ``values``) are typed ``Any`` and only checked for
+their outer shape here, so a 4 MB message is never walked or copied by pydantic; the
+message normaliser validates them against their type later.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from types import MappingProxyType
+from typing import Annotated, Any, Literal
+
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Field,
+    StrictBool,
+    StrictInt,
+    StrictStr,
+    ValidationError,
+    field_validator,
+)
+
+from schemas.errors import SchemaError
+
+
+class OpError(SchemaError):
+    """An incoming op that is malformed; ``op`` and ``id`` are what could be read of it."""
+
+    def __init__(self, message: str, op: str | None = None, id: Any = None) -> None:
+        super().__init__(message)
+        self.op = op
+        self.id = id
+
+
+class OpBase(BaseModel):
+    """Common base: extra keys allowed (kept in ``model_extra``), instances frozen."""
+
+    model_config = ConfigDict(extra="allow", frozen=True)
+
+
+def _object_or_empty(value: Any) -> Any:
+    """``args``: an object or a positional list; anything else means an empty request."""
+    return value if isinstance(value, dict | list) else {}
+
+
+def _object_required(value: Any) -> Any:
+    if value is None:
+        return {}
+    if not isinstance(value, dict):
+        raise ValueError("must be an object")
+    return value
+
+
+# -- topics -----------------------------------------------------------------------------------
+
+
+class Advertise(OpBase):
+    op: Literal["advertise"] = "advertise"
+    id: Any = None
+    topic: StrictStr
+    type: StrictStr
+    latch: StrictBool = False
+    queue_size: StrictInt = 100
+    qos: dict | None = None
+
+
+class Unadvertise(OpBase):
+    op: Literal["unadvertise"] = "unadvertise"
+    id: Any = None
+    topic: StrictStr
+
+
+class Publish(OpBase):
+    op: Literal["publish"] = "publish"
+    topic: StrictStr
+    msg: Any = Field(default_factory=dict)
+    id: Any = None
+    latch: StrictBool = False
+    queue_size: StrictInt = 100
+    type: StrictStr | None = None
+
+    _check_msg = field_validator("msg")(_object_required)
+
+
+class Subscribe(OpBase):
+    op: Literal["subscribe"] = "subscribe"
+    id: Any = None
+    topic: StrictStr
+    type: StrictStr | None = None  # roslibpy sends null when the user gave none
+    throttle_rate: StrictInt = 0  # ms between messages; a float is rejected like rosbridge
+    queue_length: StrictInt = 0
+    fragment_size: StrictInt | None = None
+    compression: StrictStr = "none"
+    qos: dict | None = None
+
+
+class Unsubscribe(OpBase):
+    op: Literal["unsubscribe"] = "unsubscribe"
+    id: Any = None
+    topic: StrictStr
+
+
+# -- services ---------------------------------------------------------------------------------
+
+
+class CallService(OpBase):
+    op: Literal["call_service"] = "call_service"
+    id: Any = None
+    service: StrictStr
+    args: Any = Field(default_factory=dict)
+    type: Any = None  # accepted and ignored: the graph decides (Lichtblick sends ROS 1 names)
+    fragment_size: StrictInt | None = None
+    compression: StrictStr = "none"
+    timeout: float | None = None  # seconds
+
+    _check_args = field_validator("args")(_object_or_empty)
+
+
+class AdvertiseService(OpBase):
+    op: Literal["advertise_service"] = "advertise_service"
+    id: Any = None
+    type: StrictStr
+    service: StrictStr
+
+
+class UnadvertiseService(OpBase):
+    op: Literal["unadvertise_service"] = "unadvertise_service"
+    id: Any = None
+    service: StrictStr
+
+
+class ServiceResponse(OpBase):
+    op: Literal["service_response"] = "service_response"
+    service: StrictStr
+    values: Any = None  # an object on success, the error text on failure
+    result: StrictBool
+    id: Any = None
+
+
+# -- actions ----------------------------------------------------------------------------------
+
+
+class SendActionGoal(OpBase):
+    op: Literal["send_action_goal"] = "send_action_goal"
+    id: Any = None
+    action: StrictStr
+    action_type: StrictStr
+    args: Any = Field(default_factory=dict)
+    feedback: bool = False
+    fragment_size: StrictInt | None = None
+    compression: StrictStr = "none"
+
+    _check_args = field_validator("args")(_object_or_empty)
+
+
+class CancelActionGoal(OpBase):
+    op: Literal["cancel_action_goal"] = "cancel_action_goal"
+    id: Any = None
+    action: StrictStr
+
+
+class ActionFeedback(OpBase):
+    op: Literal["action_feedback"] = "action_feedback"
+    action: StrictStr
+    values: Any = Field(default_factory=dict)
+    id: Any = None
+
+    _check_values = field_validator("values")(_object_required)
+
+
+class ActionResult(OpBase):
+    op: Literal["action_result"] = "action_result"
+    action: StrictStr
+    values: Any = None  # an object, or the error text when result is false
+    status: StrictInt
+    result: StrictBool
+    id: Any = None
+
+
+class AdvertiseAction(OpBase):
+    op: Literal["advertise_action"] = "advertise_action"
+    id: Any = None
+    type: StrictStr
+    action: StrictStr
+
+
+class UnadvertiseAction(OpBase):
+    op: Literal["unadvertise_action"] = "unadvertise_action"
+    id: Any = None
+    action: StrictStr
+
+
+# -- framing and status -----------------------------------------------------------------------
+
+
+class Fragment(OpBase):
+    op: Literal["fragment"] = "fragment"
+    id: Any
+    data: StrictStr
+    num: StrictInt
+    total: StrictInt  # rosbridge sends a float ((len-1)/size + 1); clients floor it
+
+    @field_validator("total", mode="before")
+    @classmethod
+    def _floor_total(cls, value: Any) -> Any:
+        if isinstance(value, float) and math.isfinite(value):
+            return math.floor(value)
+        return value
+
+
+class Png(OpBase):
+    op: Literal["png"] = "png"
+    data: StrictStr
+    id: Any = None
+
+
+class SetLevel(OpBase):
+    op: Literal["set_level"] = "set_level"
+    id: Any = None
+    level: Literal["info", "warning", "error", "none"]
+
+
+class Status(OpBase):
+    op: Literal["status"] = "status"
+    level: StrictStr
+    msg: StrictStr
+    id: Any = None
+
+
+OpModel = (
+    Advertise
+    | Unadvertise
+    | Publish
+    | Subscribe
+    | Unsubscribe
+    | CallService
+    | AdvertiseService
+    | UnadvertiseService
+    | ServiceResponse
+    | Fragment
+    | Png
+    | SetLevel
+    | Status
+    | SendActionGoal
+    | CancelActionGoal
+    | ActionFeedback
+    | ActionResult
+    | AdvertiseAction
+    | UnadvertiseAction
+)
+Op = Annotated[OpModel, Field(discriminator="op")]
+
+#: op name -> model class.
+MODELS: Mapping[str, type[OpBase]] = MappingProxyType(
+    {model.model_fields["op"].default: model for model in OpModel.__args__}
+)
+
+_PHRASES = {
+    "int_type": "must be an integer",
+    "string_type": "must be a string",
+    "bool_type": "must be a boolean",
+    "bool_parsing": "must be a boolean",
+    "float_type": "must be a number",
+    "float_parsing": "must be a number",
+    "dict_type": "must be an object",
+}
+
+
+def _short_repr(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+def _describe_error(op: str, error: Mapping[str, Any], more: int) -> str:
+    field = ".".join(str(part) for part in error["loc"])
+    kind = error["type"]
+    if kind == "missing":
+        text = f"{op}: field '{field}' is required"
+    else:
+        phrase = _PHRASES.get(kind)
+        if phrase is None:
+            message = error["msg"].removeprefix("Value error, ")
+            if message.startswith("Input should be "):
+                phrase = "must be " + message.removeprefix("Input should be ")
+            else:
+                phrase = message[:1].lower() + message[1:] if message else "is invalid"
+        text = f"{op}: field '{field}' {phrase}, got {_short_repr(error.get('input'))}"
+    return text + (f" (and {more} more problem(s))" if more else "")
+
+
+def parse_op(obj: Any) -> OpModel:
+    """Validate one decoded JSON/CBOR object as a rosbridge op.
+
+    Raises :class:`OpError` with a one-line message naming the op and the bad field, e.g.
+    ``"subscribe: field 'throttle_rate' must be an integer, got 'fast'"``.
+    """
+    if not isinstance(obj, Mapping):
+        raise OpError(f"expected a JSON object with an 'op' field, got {type(obj).__name__}")
+    op_id = obj.get("id")
+    op = obj.get("op")
+    if op is None:
+        keys = sorted(str(key)[:20] for key in obj)[:8]
+        raise OpError(f"message has no 'op' field (keys: {keys})", id=op_id)
+    if not isinstance(op, str):
+        raise OpError(f"field 'op' must be a string, got {_short_repr(op)}", id=op_id)
+    model = MODELS.get(op)
+    if model is None:
+        raise OpError(f"unknown op {_short_repr(op)}", op=op, id=op_id)
+    try:
+        return model.model_validate(obj)  # type: ignore[return-value]
+    except ValidationError as exc:
+        errors = exc.errors(include_url=False)
+        raise OpError(_describe_error(op, errors[0], len(errors) - 1), op=op, id=op_id) from None
+
+
+def to_wire(model: OpBase) -> dict:
+    """The op as a dict in rosbridge key order, with only ``op`` and the fields that were set.
+
+    ``id`` therefore appears only when the op was built (or parsed) with one.
+    """
+    fields_set = model.model_fields_set
+    return {
+        name: getattr(model, name)
+        for name in type(model).model_fields
+        if name == "op" or name in fields_set
+    }
