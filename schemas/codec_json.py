@@ -66,8 +66,34 @@ def _native_arrays(obj: Any) -> Any:
     return obj
 
 
+def _widen_float32(obj: Any) -> Any:
+    """``obj`` with float32 ndarrays widened to float64, copying only the containers on the way.
+
+    rosbridge (ROS 2) hands float32 values to its JSON writer as Python floats, so clients read
+    ``0.10000000149011612`` for ``0.1f``; orjson would print float32 arrays in their shortest
+    float32 form, which parses to a different double. Scalars are already widened by
+    ``normalize``. Canonical messages keep large numeric data in ndarrays and ``bytes``, so
+    this walk touches only the message's fields, never its elements.
+    """
+    if isinstance(obj, np.ndarray):
+        return obj.astype(np.float64) if obj.dtype == np.float32 else obj
+    if isinstance(obj, dict):
+        widened = None
+        for key, value in obj.items():
+            new = _widen_float32(value)
+            if new is not value:
+                widened = widened if widened is not None else dict(obj)
+                widened[key] = new
+        return obj if widened is None else widened
+    if isinstance(obj, list) and obj and isinstance(obj[0], dict | list | np.ndarray):
+        items = [_widen_float32(value) for value in obj]
+        return obj if all(a is b for a, b in zip(items, obj, strict=True)) else items
+    return obj
+
+
 def dumps(obj: Any) -> bytes:
     """Serialize to compact, pure-ASCII JSON; ``bytes`` -> base64, NaN/±Inf -> ``null``."""
+    obj = _widen_float32(obj)
     try:
         out = orjson.dumps(obj, default=_default, option=_OPTIONS)
     except orjson.JSONEncodeError:

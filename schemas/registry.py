@@ -41,6 +41,11 @@ BUILTIN_INTERFACES_DIR = Path(__file__).resolve().parent / "interfaces"
 _ARRAY_KIND: dict[Nodetype, ArrayKind] = {Nodetype.ARRAY: "fixed", Nodetype.SEQUENCE: "sequence"}
 
 
+#: rosbags gives a message without fields this member (ROS 2 IDL forbids empty structs); it is
+#: a CDR detail, so specs leave it out and clients see ``{}`` as rosbridge sends it.
+EMPTY_MESSAGE_PLACEHOLDER = "structure_needs_at_least_one_member"
+
+
 class TypeRegistry:
     """Known message, service and action types, under both ``pkg/Type`` spellings."""
 
@@ -176,7 +181,11 @@ class TypeRegistry:
         consts, fields = self.typestore.fielddefs[full]
         spec = MessageSpec(
             name=full,
-            fields=tuple(self._field_spec(full, fname, node) for fname, node in fields),
+            fields=tuple(
+                self._field_spec(full, fname, node)
+                for fname, node in fields
+                if fname != EMPTY_MESSAGE_PLACEHOLDER
+            ),
             constants=tuple((cname, ctype, value) for cname, ctype, value in consts),
         )
         self._specs[full] = spec

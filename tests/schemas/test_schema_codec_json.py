@@ -70,3 +70,12 @@ def test_canonical_message_round_trip(registry, pointcloud):
     wire = codec_json.loads(codec_json.dumps(msg))
     assert wire["data"] == base64.b64encode(pointcloud["data"]).decode()
     assert normalize(spec, wire, now_ns=0) == msg
+
+
+def test_float32_arrays_are_written_as_their_exact_double_values() -> None:
+    """rosbridge widens float32 to double before writing JSON; so must we, in nested arrays too."""
+    msg = {"data": np.array([0.1, 2.0**100], np.float32), "items": [{"v": np.float32([0.1])}]}
+    decoded = json.loads(codec_json.dumps(msg))
+    assert decoded["data"] == [0.10000000149011612, 2.0**100]
+    assert decoded["items"][0]["v"] == [0.10000000149011612]
+    assert msg["data"].dtype == np.float32, "the caller's message must not change"

@@ -190,3 +190,17 @@ def test_irregular_spellings_are_not_cached():
     for slashes in range(1, 50):
         registry.message("std_msgs" + "/" * slashes + "String")
     assert len(registry._specs) <= 2  # canonical and short spelling only
+
+
+def test_messages_without_fields_have_no_fields(registry):
+    """rosbags' CDR placeholder member must not leak to clients (rosbridge sends ``{}``)."""
+    from schemas.codec_cdr import from_cdr, to_cdr
+    from schemas.message import normalize
+
+    assert registry.message("std_msgs/msg/Empty").fields == ()
+    assert registry.service("std_srvs/srv/Trigger").request.fields == ()
+    assert registry.typedefs("std_msgs/Empty")[0]["fieldnames"] == []
+    empty = normalize(registry.message("std_msgs/msg/Empty"), {}, now_ns=0)
+    assert empty == {}
+    cdr = to_cdr(registry, "std_msgs/msg/Empty", empty)
+    assert from_cdr(registry, "std_msgs/msg/Empty", cdr) == {}
