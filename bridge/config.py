@@ -1,0 +1,44 @@
+"""Bridge configuration: one frozen model shared by the CLI, the edge and the core.
+
+Defaults follow the reference rosbridge server (rosbridge-protocol.md §8) except where the
+design asks for more headroom: the thesis' LIDAR scan (Table 4.3, ~345,000 points at 2 Hz) is
+~7.5 MB as JSON, so the inbound frame limit is raised from rosbridge's 10 MB to 64 MiB.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from pydantic import BaseModel, ConfigDict, Field
+
+MIB = 1024 * 1024
+
+
+class BridgeConfig(BaseModel):
+    """Everything the bridge needs to start; immutable once built."""
+
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+    host: str = "127.0.0.1"
+    # rosbridge's default port (protocol §8); 0 picks a free port.
+    port: int = Field(default=9090, ge=0, le=65535)
+    # Inbound frame limit in bytes; larger frames are refused with close code 1009 (protocol
+    # §1.1). 64 MiB holds a full Table 4.3 LIDAR scan in JSON (~7.5 MB) with room to spare.
+    max_message_size: int = Field(default=64 * MIB, gt=0)
+    # Seconds before an incomplete inbound fragment list is discarded (protocol §8).
+    fragment_timeout_s: float = Field(default=600.0, gt=0)
+    # Default call_service timeout in seconds (rosbridge 2.2+ default_call_service_timeout).
+    call_timeout_s: float = Field(default=5.0, gt=0)
+    # fnmatch patterns gating topic and service names; empty = allow all (protocol §8).
+    topics_glob: tuple[str, ...] = ()
+    services_glob: tuple[str, ...] = ()
+    # Messages of one topic waiting for one client; past it that topic's oldest is dropped
+    # (rosbridge 2026 write_queue_size idea, #1290): a few frames of the fastest sensor.
+    send_queue: int = Field(default=16, gt=0)
+    # Frames whose payload exceeds this many bytes are encoded in the worker pool, off the loop
+    # (a 4 MB JSON+base64 encode is ~10-30 ms, performance-measurements §2(c)).
+    offload_threshold_bytes: int = Field(default=256 * 1024, gt=0)
+    # Extra folders of .msg/.srv/.action definitions registered at start-up.
+    interface_dirs: tuple[Path, ...] = ()
+    # ROS distribution reported by /rosapi/get_ros_version.
+    distro: str = "jazzy"

@@ -1,0 +1,118 @@
+"""Shared core state and the per-call context handlers write their effects into."""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass
+from typing import Any
+
+from bridge.config import BridgeConfig
+from bridge.effects import Close, Effect, Schedule, Send
+from bridge.graph import Graph
+from bridge.outgoing import ControlMessage, Delivery, TopicMessage
+from bridge.session import ClientSession, StatusLevel
+from bridge.sinks import LocalFanout, MessageSink
+from bridge.subscription import Release, Subscription
+from schemas.registry import TypeRegistry
+
+logger = logging.getLogger("bridge.core")
+
+
+@dataclass
+class PendingCall:
+    """A call forwarded to a provider, waiting for its `service_response`."""
+
+    service: str
+    provider: int
+    caller: int
+    caller_id: Any
+    caller_service: str
+    timeout_s: float
+
+
+@dataclass
+class PendingGoal:
+    """A goal forwarded to an action provider, waiting for its `action_result`."""
+
+    action: str
+    provider: int
+    caller: int
+    caller_id: Any
+    caller_action: str
+    feedback: bool
+
+
+class BridgeState:
+    """Everything the core knows; owned by one `BridgeCore`, mutated only through handlers."""
+
+    def __init__(self, config: BridgeConfig, registry: TypeRegistry) -> None:
+        self.config = config
+        self.registry = registry
+        self.graph = Graph()
+        self.sessions: dict[int, ClientSession] = {}
+        self.topic_subscriptions: dict[str, dict[int, Subscription]] = {}
+        self.pending_calls: dict[str, PendingCall] = {}
+        self.pending_goals: dict[str, PendingGoal] = {}
+        self.params: dict[str, str] = {}
+        self.sinks: list[MessageSink] = [LocalFanout()]
+        # Services the bridge answers itself, name -> RosapiService (set by the core).
+        self.rosapi: dict[str, Any] = {}
+        self.clients_ever = 0
+
+    def session_of_node(self, node: str) -> ClientSession | None:
+        return next((s for s in self.sessions.values() if s.node == node), None)
+
+
+class Context:
+    """One core call: the state, the time it happens at, and the effects produced."""
+
+    def __init__(self, state: BridgeState, now_ns: int) -> None:
+        self.state = state
+        self.now_ns = now_ns
+        self.effects: list[Effect] = []
+        # Texts of completed fragment lists, fed back to the core as inbound messages.
+        self.reassembled: list[str] = []
+
+    def send(self, client_id: int, payload: dict[str, Any]) -> None:
+        """Queue a JSON op for a client; it will never be dropped from the send queue."""
+        session = self.state.sessions.get(client_id)
+        if session is not None:
+            self.effects.append(Send(client_id, ControlMessage(payload), None,
+                                     session.fragment_size_for()))
+
+    def release(self, session: ClientSession, subscription: Subscription,
+                release: Release) -> None:
+        """Turn a subscription's release into deliveries and a wake-up deadline."""
+        encoding = subscription.settings.compression
+        fragment_size = session.fragment_size_for(subscription)
+        for message in release.messages:
+            self.effects.append(Send(session.client_id,
+                                     Delivery(message, subscription.spelling, encoding),
+                                     subscription.topic, fragment_size))
+        if release.wake_at_ns is not None:
+            self.schedule(("release", session.client_id, subscription.topic),
+                          release.wake_at_ns)
+
+    def publish(self, message: TopicMessage, origin_node: str) -> None:
+        """Hand a message to every sink (local subscribers first)."""
+        for sink in self.state.sinks:
+            sink.accept(self, message, origin_node)
+
+    def schedule(self, key: object, at_ns: int) -> None:
+        self.effects.append(Schedule(key, at_ns))
+
+    def close(self, client_id: int, code: int, reason: str) -> None:
+        self.effects.append(Close(client_id, code, reason))
+
+    def problem(self, session: ClientSession, op: str, op_id: Any, text: str,
+                level: StatusLevel = StatusLevel.ERROR) -> None:
+        """Log one line naming client, op, id and problem; tell the client if it opted in."""
+        log_level = logging.WARNING if level == StatusLevel.WARNING else logging.ERROR
+        if level == StatusLevel.INFO:
+            log_level = logging.INFO
+        logger.log(log_level, "[%s] op=%s id=%s: %s", session.node, op, op_id, text)
+        if level >= session.status_level and session.status_level != StatusLevel.NONE:
+            status: dict[str, Any] = {"op": "status", "level": level.name.lower(), "msg": text}
+            if op_id is not None:
+                status["id"] = op_id
+            self.send(session.client_id, status)

@@ -1,0 +1,224 @@
+"""The sans-I/O rosbridge core: frames and the time in, effects out.
+
+`BridgeCore` owns the graph and every client session. The asyncio edge calls it with what
+arrived and when; it never awaits, never opens a socket and never reads the clock. Ops are
+dispatched through one table built from the op-family modules in `bridge.ops`.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+from collections.abc import Callable, Hashable
+from typing import Any
+
+from bridge.config import BridgeConfig
+from bridge.context import BridgeState, Context
+from bridge.effects import Effect
+from bridge.errors import BridgeError, InvalidNameError
+from bridge.inbound import decode_frame
+from bridge.names import absolute_name
+from bridge.ops import Handler, actions, fragments, levels, merge_tables, services, topics
+from bridge.outgoing import TopicMessage
+from bridge.rosapi import ROSAPI_SERVICES
+from bridge.session import ClientSession
+from bridge.sinks import MessageSink
+from schemas.errors import SchemaError
+from schemas.message import normalize
+from schemas.ops import OpError, parse_op
+from schemas.registry import TypeRegistry
+from schemas.specs import MessageSpec
+
+logger = logging.getLogger("bridge.core")
+
+OP_HANDLERS: dict[str, Handler] = merge_tables(
+    topics.HANDLERS, services.HANDLERS, actions.HANDLERS, fragments.HANDLERS, levels.HANDLERS)
+
+# Deadline keys are tuples whose first item selects the handler; the rest are its arguments.
+DEADLINE_HANDLERS: dict[str, Callable[..., None]] = {
+    "release": topics.on_release_deadline,
+    "call": services.on_call_deadline,
+    "fragment": fragments.on_fragment_deadline,
+}
+
+# Clean-up per op family when a client leaves; each releases what the client owned.
+RELEASERS = (services.release_client, actions.release_client, topics.release_client)
+
+
+class BridgeCore:
+    """All protocol behaviour of the bridge, independent of any transport."""
+
+    def __init__(self, config: BridgeConfig, registry: TypeRegistry) -> None:
+        self.state = BridgeState(config, registry)
+        self.state.rosapi = dict(ROSAPI_SERVICES)
+
+    # -- connections -------------------------------------------------------------------------
+
+    def connect(self, peer: str = "") -> int:
+        """Register a new client; returns its id (its node is `/rosbridge_client_<id>`)."""
+        self.state.clients_ever += 1
+        client_id = self.state.clients_ever
+        node = f"/rosbridge_client_{client_id}"
+        self.state.sessions[client_id] = ClientSession(client_id, node, peer)
+        logger.info("[%s] connected from %s", node, peer or "?")
+        return client_id
+
+    def disconnect(self, client_id: int, now_ns: int) -> list[Effect]:
+        """Release everything the client owned and answer whatever waited on it."""
+        ctx = Context(self.state, now_ns)
+        session = self.state.sessions.pop(client_id, None)
+        if session is None:
+            return []
+        for release in RELEASERS:
+            release(ctx, session)
+        logger.info("[%s] disconnected", session.node)
+        return ctx.effects
+
+    # -- inbound -----------------------------------------------------------------------------
+
+    def receive(self, client_id: int, data: bytes | str, now_ns: int) -> list[Effect]:
+        """Handle one websocket frame (text = JSON, binary = CBOR or JSON)."""
+        try:
+            decoded = decode_frame(data)
+        except SchemaError as exc:
+            return self.receive_invalid(client_id, str(exc), now_ns)
+        return self.receive_decoded(client_id, decoded, now_ns)
+
+    def prepare(self, data: bytes | str, now_ns: int) -> Any:
+        """Decode a frame and pre-convert a publish's message; meant for a worker thread.
+
+        The costly parts of a large publish (JSON parse, base64 decode of byte arrays) happen
+        here, off the event loop. It only reads the graph (the topic's type); the handler
+        validates the result again on the loop, which is cheap for canonical input. Raises
+        SchemaError for undecodable frames; hand the result to `receive_decoded`.
+        """
+        message = decode_frame(data)
+        if isinstance(message, dict) and message.get("op") == "publish":
+            spec = self._presumed_spec(message)
+            if spec is not None and isinstance(message.get("msg"), dict):
+                with contextlib.suppress(SchemaError):
+                    message = {**message, "msg": normalize(spec, message["msg"], now_ns=now_ns)}
+        return message
+
+    def _presumed_spec(self, message: dict[str, Any]) -> MessageSpec | None:
+        topic = message.get("topic")
+        try:
+            entry = self.state.graph.topics.get(absolute_name(topic)) if isinstance(
+                topic, str) else None
+        except InvalidNameError:
+            return None
+        type_name = entry.type_name if entry is not None else message.get("type")
+        try:
+            return self.state.registry.message(type_name) if isinstance(type_name, str) else None
+        except SchemaError:
+            return None
+
+    def receive_invalid(self, client_id: int, problem: str, now_ns: int) -> list[Effect]:
+        """A frame that did not decode (the edge decodes large frames in a worker)."""
+        ctx = Context(self.state, now_ns)
+        session = self.state.sessions.get(client_id)
+        if session is not None:
+            ctx.problem(session, "?", None, f"undecodable frame: {problem}")
+        return ctx.effects
+
+    def receive_decoded(self, client_id: int, message: Any, now_ns: int) -> list[Effect]:
+        """Handle one decoded message (and any message its fragments complete)."""
+        ctx = Context(self.state, now_ns)
+        session = self.state.sessions.get(client_id)
+        if session is None:
+            return []
+        self._dispatch(ctx, session, message)
+        while ctx.reassembled and client_id in self.state.sessions:
+            text = ctx.reassembled.pop(0)
+            try:
+                self._dispatch(ctx, session, decode_frame(text))
+            except SchemaError as exc:
+                ctx.problem(session, "fragment", None, f"reassembled text is not JSON: {exc}")
+        return ctx.effects
+
+    def _dispatch(self, ctx: Context, session: ClientSession, message: Any) -> None:
+        if not isinstance(message, dict):
+            ctx.problem(session, "?", None,
+                        f"message must be a JSON object, got {type(message).__name__}")
+            return
+        op_name, op_id = message.get("op"), message.get("id")
+        if "fragment_size" in message:
+            set_fragment_size(ctx, session, message["fragment_size"], op_name, op_id)
+        if not isinstance(op_name, str) or op_name not in OP_HANDLERS:
+            what = "message without an op" if op_name is None else f"Unknown operation: {op_name}"
+            ctx.problem(session, str(op_name), op_id, what)
+            return
+        handler = OP_HANDLERS[op_name]
+        try:
+            op = parse_op(message)
+        except OpError as exc:
+            answer_failed_request(ctx, session, message, f"malformed op: {exc}")
+            return
+        try:
+            handler(ctx, session, op)
+        except (BridgeError, SchemaError) as exc:
+            ctx.problem(session, op_name, op_id, str(exc))
+        except Exception as exc:  # a bug must cost one op, never the connection or the server
+            logger.exception("[%s] op=%s id=%s: internal error", session.node, op_name, op_id)
+            answer_failed_request(ctx, session, message, f"internal error: {exc!r}")
+
+    # -- time --------------------------------------------------------------------------------
+
+    def on_deadline(self, key: Hashable, now_ns: int) -> list[Effect]:
+        """A deadline scheduled with `Schedule(key, at_ns)` has come."""
+        ctx = Context(self.state, now_ns)
+        if isinstance(key, tuple) and key and key[0] in DEADLINE_HANDLERS:
+            DEADLINE_HANDLERS[key[0]](ctx, *key[1:])
+        return ctx.effects
+
+    # -- the middleware seam -----------------------------------------------------------------
+
+    def add_sink(self, sink: MessageSink) -> None:
+        """Receive every message published in the graph from now on (e.g. a DDS mirror)."""
+        self.state.sinks.append(sink)
+
+    def publish_external(self, node: str, topic: str, type_name: str, msg: dict[str, Any],
+                         now_ns: int, cdr: bytes | None = None) -> list[Effect]:
+        """Publish a message from a source outside the websocket clients (a DDS mirror).
+
+        `node` becomes a publisher of the topic; `msg` is validated and completed like a
+        client's message; `cdr`, if given, is reused for cbor-raw subscribers.
+        """
+        ctx = Context(self.state, now_ns)
+        name = absolute_name(topic)
+        spec = self.state.registry.message(type_name)
+        self.state.graph.declare_type(name, spec.name)
+        self.state.graph.add_publisher(name, node, None, latch=False)
+        message = TopicMessage(name, spec.name, normalize(spec, msg, now_ns=now_ns), now_ns,
+                               self.state.registry, cdr)
+        ctx.publish(message, node)
+        return ctx.effects
+
+
+def set_fragment_size(ctx: Context, session: ClientSession, value: Any, op_name: Any,
+                      op_id: Any) -> None:
+    """Any message carrying `fragment_size` sets the client-wide size (protocol §1.2)."""
+    if value is None:
+        session.fragment_size = None
+    elif isinstance(value, int) and not isinstance(value, bool) and value > 0:
+        session.fragment_size = value
+    else:
+        ctx.problem(session, str(op_name), op_id,
+                    f"fragment_size must be a positive integer or null, got {value!r}")
+
+
+def answer_failed_request(ctx: Context, session: ClientSession, message: dict[str, Any],
+                          problem: str) -> None:
+    """Log an op that could not be handled; a caller waiting for an answer still gets one.
+
+    A `call_service` is answered with `result: false`, a `send_action_goal` with a failed
+    `action_result`, and a provider's unusable `service_response` fails its caller's call.
+    """
+    op_name, op_id = message["op"], message.get("id")
+    ctx.problem(session, op_name, op_id, problem)
+    if op_name == "call_service" and isinstance(message.get("service"), str):
+        services.respond(ctx, session.client_id, message["service"], op_id, problem, False)
+    elif op_name == "service_response":
+        services.settle_unparsed_response(ctx, session, message, problem)
+    elif op_name == "send_action_goal" and isinstance(message.get("action"), str):
+        actions.fail_goal(ctx, session.client_id, message["action"], op_id, problem)

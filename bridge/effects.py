@@ -1,0 +1,51 @@
+"""What the sans-I/O core asks the edge to do.
+
+The core never touches a socket or a clock; every call returns a list of these effects and
+the asyncio edge (`bridge.server`) carries them out in order.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Hashable
+from dataclasses import dataclass
+
+from bridge.outgoing import Outgoing
+
+
+@dataclass(frozen=True, slots=True)
+class Send:
+    """Queue `item` for client `client_id`.
+
+    `drop_key` names the stream the item belongs to (the topic for `publish` deliveries): when
+    the client's send queue is full the oldest item with a drop key is discarded. `None` means
+    the item must never be dropped (service responses, action results, forwarded requests).
+    Text frames longer than `fragment_size` characters go out as `fragment` ops.
+    """
+
+    client_id: int
+    item: Outgoing
+    drop_key: str | None = None
+    fragment_size: int | None = None
+
+
+@dataclass(frozen=True, slots=True)
+class Close:
+    """Close the client's websocket with `code` (RFC 6455) and `reason`."""
+
+    client_id: int
+    code: int
+    reason: str
+
+
+@dataclass(frozen=True, slots=True)
+class Schedule:
+    """Call `BridgeCore.on_deadline(key, now_ns)` once the wall clock reaches `at_ns`.
+
+    Scheduling a key that is already pending replaces the earlier deadline.
+    """
+
+    key: Hashable
+    at_ns: int
+
+
+Effect = Send | Close | Schedule

@@ -1,0 +1,184 @@
+"""Actions provided by clients (protocol §2.9).
+
+A caller's `send_action_goal` is forwarded to the advertising client with id
+`action_goal:<action>:<n>`; the provider's `action_feedback` and `action_result` are routed
+back under the caller's own id, and the caller's `cancel_action_goal` is forwarded. Goals
+that cannot be served end at once with `action_result` `result: false`.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from bridge.context import Context, PendingGoal
+from bridge.errors import BridgeError, OpFailure
+from bridge.graph import ActionEntry
+from bridge.names import absolute_name
+from bridge.session import ClientSession
+from schemas.errors import SchemaError
+from schemas.message import normalize
+from schemas.specs import MessageSpec
+from schemas.typenames import is_valid_type_name, normalize_type_name
+
+STATUS_SUCCEEDED = 4
+STATUS_ABORTED = 6  # action_msgs/GoalStatus
+
+
+def fail_goal(ctx: Context, caller: int, action: str, caller_id: Any, reason: str) -> None:
+    """End a caller's goal with `result: false`, status ABORTED and the reason as values."""
+    payload: dict[str, Any] = {"op": "action_result", "action": action, "values": reason,
+                               "status": STATUS_ABORTED, "result": False}
+    if caller_id is not None:
+        payload["id"] = caller_id
+    ctx.send(caller, payload)
+
+
+def action_spec_part(ctx: Context, type_name: str | None, part: str) -> MessageSpec | None:
+    """goal/result/feedback spec of a known action type, else None (relayed untyped)."""
+    if type_name is None or not ctx.state.registry.has_action(type_name):
+        return None
+    return getattr(ctx.state.registry.action(type_name), part)
+
+
+def filled(ctx: Context, spec: MessageSpec | None, raw: Any) -> Any:
+    if spec is None:
+        return {} if raw is None else raw
+    if isinstance(raw, list):
+        raw = dict(zip([f.name for f in spec.fields], raw, strict=False))
+    try:
+        return normalize(spec, raw if isinstance(raw, dict) else {}, now_ns=ctx.now_ns)
+    except SchemaError as exc:
+        raise OpFailure(str(exc)) from exc
+
+
+def handle_send_action_goal(ctx: Context, session: ClientSession, op: Any) -> None:
+    try:
+        forward_goal(ctx, session, op)
+    except (BridgeError, SchemaError) as exc:
+        ctx.problem(session, "send_action_goal", op.id, f"{op.action}: {exc}")
+        fail_goal(ctx, session.client_id, op.action, op.id, str(exc))
+
+
+def forward_goal(ctx: Context, session: ClientSession, op: Any) -> None:
+    name = absolute_name(op.action)
+    entry = ctx.state.graph.actions.get(name)
+    provider = ctx.state.session_of_node(entry.provider) if entry else None
+    if entry is None or provider is None:
+        raise OpFailure(f"Action {name} does not exist")
+    type_name = entry.type_name or op.action_type
+    args = filled(ctx, action_spec_part(ctx, type_name, "goal"), op.args)
+    entry.goals_sent += 1
+    goal_id = f"action_goal:{entry.spelling}:{entry.goals_sent}"
+    ctx.state.pending_goals[goal_id] = PendingGoal(
+        name, provider.client_id, session.client_id, op.id, op.action, bool(op.feedback))
+    ctx.send(provider.client_id, {"op": "send_action_goal", "id": goal_id,
+                                  "action": entry.spelling, "action_type": type_name,
+                                  "args": args, "feedback": True})
+
+
+def provider_goal(ctx: Context, session: ClientSession, goal_id: Any) -> PendingGoal:
+    pending = ctx.state.pending_goals.get(goal_id) if isinstance(goal_id, str) else None
+    if pending is None or pending.provider != session.client_id:
+        raise OpFailure(f"no pending goal with id {goal_id!r} for this provider")
+    return pending
+
+
+def handle_action_feedback(ctx: Context, session: ClientSession, op: Any) -> None:
+    pending = provider_goal(ctx, session, op.id)
+    if not pending.feedback:
+        return
+    entry = ctx.state.graph.actions.get(pending.action)
+    values = filled(ctx, action_spec_part(ctx, entry.type_name if entry else None,
+                                          "feedback"), op.values)
+    payload: dict[str, Any] = {"op": "action_feedback", "action": pending.caller_action,
+                               "values": values}
+    if pending.caller_id is not None:
+        payload["id"] = pending.caller_id
+    ctx.send(pending.caller, payload)
+
+
+def handle_action_result(ctx: Context, session: ClientSession, op: Any) -> None:
+    pending = provider_goal(ctx, session, op.id)
+    del ctx.state.pending_goals[op.id]
+    if op.result is False or isinstance(op.values, str):
+        reason = op.values if isinstance(op.values, str) else "Action provider reported failure"
+        fail_goal(ctx, pending.caller, pending.caller_action, pending.caller_id, reason)
+        return
+    entry = ctx.state.graph.actions.get(pending.action)
+    try:
+        values = filled(ctx, action_spec_part(ctx, entry.type_name if entry else None,
+                                              "result"), op.values)
+    except OpFailure as exc:
+        ctx.problem(session, "action_result", op.id, str(exc))
+        fail_goal(ctx, pending.caller, pending.caller_action, pending.caller_id, str(exc))
+        return
+    status = op.status if isinstance(op.status, int) else STATUS_SUCCEEDED
+    payload: dict[str, Any] = {"op": "action_result", "action": pending.caller_action,
+                               "values": values, "status": status, "result": True}
+    if pending.caller_id is not None:
+        payload["id"] = pending.caller_id
+    ctx.send(pending.caller, payload)
+
+
+def handle_cancel_action_goal(ctx: Context, session: ClientSession, op: Any) -> None:
+    """Forward the caller's cancel; the provider's eventual result reports CANCELED."""
+    for goal_id, pending in ctx.state.pending_goals.items():
+        if pending.caller == session.client_id and pending.caller_id == op.id:
+            entry = ctx.state.graph.actions.get(pending.action)
+            spelling = entry.spelling if entry else pending.action
+            ctx.send(pending.provider, {"op": "cancel_action_goal", "id": goal_id,
+                                        "action": spelling})
+            return
+    raise OpFailure(f"no pending goal with id {op.id!r} to cancel")
+
+
+def handle_advertise_action(ctx: Context, session: ClientSession, op: Any) -> None:
+    name = absolute_name(op.action)
+    if name in ctx.state.graph.actions:
+        remove_action(ctx, name, f"Action {name} was advertised again by another provider")
+    type_name = normalize_type_name(op.type, "action") if is_valid_type_name(op.type) else None
+    ctx.state.graph.actions[name] = ActionEntry(name, op.action, type_name, session.node)
+    session.actions.add(name)
+
+
+def handle_unadvertise_action(ctx: Context, session: ClientSession, op: Any) -> None:
+    name = absolute_name(op.action)
+    entry = ctx.state.graph.actions.get(name)
+    if entry is None or entry.provider != session.node:
+        raise OpFailure(f"Action {name} has not been advertised by this client")
+    remove_action(ctx, name, f"Action {name} was unadvertised")
+
+
+def remove_action(ctx: Context, name: str, reason: str) -> None:
+    """Forget an action server; its pending goals end with `result: false`."""
+    entry = ctx.state.graph.actions.pop(name)
+    owner = ctx.state.session_of_node(entry.provider)
+    if owner is not None:
+        owner.actions.discard(name)
+    for goal_id, pending in list(ctx.state.pending_goals.items()):
+        if pending.action == name:
+            del ctx.state.pending_goals[goal_id]
+            fail_goal(ctx, pending.caller, pending.caller_action, pending.caller_id, reason)
+
+
+def release_client(ctx: Context, session: ClientSession) -> None:
+    """Disconnect clean-up: provided actions end; goals the client sent are cancelled."""
+    for name in list(session.actions):
+        remove_action(ctx, name, f"Action {name} provider disconnected")
+    for goal_id, pending in list(ctx.state.pending_goals.items()):
+        if pending.caller == session.client_id:
+            del ctx.state.pending_goals[goal_id]
+            entry = ctx.state.graph.actions.get(pending.action)
+            if entry is not None:
+                ctx.send(pending.provider, {"op": "cancel_action_goal", "id": goal_id,
+                                            "action": entry.spelling})
+
+
+HANDLERS = {
+    "send_action_goal": handle_send_action_goal,
+    "cancel_action_goal": handle_cancel_action_goal,
+    "action_feedback": handle_action_feedback,
+    "action_result": handle_action_result,
+    "advertise_action": handle_advertise_action,
+    "unadvertise_action": handle_unadvertise_action,
+}

@@ -1,0 +1,165 @@
+"""advertise, unadvertise, publish, subscribe, unsubscribe (protocol §2.1-2.5, §5, §6)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from bridge.context import Context
+from bridge.errors import GraphConflictError, OpFailure
+from bridge.names import absolute_name, allowed
+from bridge.outgoing import TopicMessage
+from bridge.session import ClientSession
+from bridge.subscription import SubscribeSettings, Subscription
+from schemas.errors import SchemaError
+from schemas.message import normalize
+
+
+def topic_name(ctx: Context, raw: str) -> str:
+    """Absolute topic name, refused if outside `--topics-glob`."""
+    name = absolute_name(raw)
+    if not allowed(name, ctx.state.config.topics_glob):
+        raise OpFailure(f"topic {name} is not allowed by topics_glob")
+    return name
+
+
+def message_type(ctx: Context, raw: str) -> str:
+    """Canonical `pkg/msg/Type` of a registered message type, else OpFailure."""
+    try:
+        return ctx.state.registry.message(raw).name
+    except SchemaError as exc:
+        raise OpFailure(str(exc)) from exc
+
+
+def declare(ctx: Context, name: str, type_name: str) -> None:
+    try:
+        ctx.state.graph.declare_type(name, type_name)
+    except GraphConflictError as exc:
+        raise OpFailure(str(exc)) from exc
+
+
+def id_key(raw: Any) -> Any:
+    """Ids may be any JSON value; unhashable ones (objects, lists) are keyed by their repr."""
+    return raw if raw is None or isinstance(raw, str | int | float | bool) else repr(raw)
+
+
+def handle_advertise(ctx: Context, session: ClientSession, op: Any) -> None:
+    name = topic_name(ctx, op.topic)
+    declare(ctx, name, message_type(ctx, op.type))
+    ctx.state.graph.add_publisher(name, session.node, id_key(op.id), op.latch)
+    session.published.add(name)
+
+
+def handle_unadvertise(ctx: Context, session: ClientSession, op: Any) -> None:
+    name = topic_name(ctx, op.topic)
+    ctx.state.graph.remove_publisher(name, session.node, id_key(op.id),
+                                     every_id=op.id is None)
+    entry = ctx.state.graph.topics.get(name)
+    if entry is None or session.node not in entry.publishers:
+        session.published.discard(name)
+
+
+def handle_publish(ctx: Context, session: ClientSession, op: Any) -> None:
+    name = topic_name(ctx, op.topic)
+    graph = ctx.state.graph
+    entry = graph.topics.get(name)
+    if op.type is not None:
+        declare(ctx, name, message_type(ctx, op.type))
+        entry = graph.topics[name]
+    if entry is None or entry.type_name is None:
+        raise OpFailure(f"Cannot infer topic type for topic {name} as it is not yet advertised")
+    if session.node not in entry.publishers:
+        graph.add_publisher(name, session.node, id_key(op.id), op.latch)
+        session.published.add(name)
+    elif op.latch:
+        entry.latching.add(session.node)
+    spec = ctx.state.registry.message(entry.type_name)
+    try:
+        msg = normalize(spec, {} if op.msg is None else op.msg, now_ns=ctx.now_ns)
+    except SchemaError as exc:
+        raise OpFailure(f"message dropped: {exc}") from exc
+    message = TopicMessage(name, entry.type_name, msg, ctx.now_ns, ctx.state.registry)
+    if session.node in entry.latching:
+        entry.latched = message
+    ctx.publish(message, session.node)
+
+
+def subscribe_settings(op: Any) -> SubscribeSettings:
+    return SubscribeSettings(
+        throttle_ms=max(0, op.throttle_rate or 0),
+        queue_length=max(0, op.queue_length or 0),
+        fragment_size=op.fragment_size if op.fragment_size and op.fragment_size > 0 else None,
+        compression=SubscribeSettings.known_compression(op.compression),
+    )
+
+
+def handle_subscribe(ctx: Context, session: ClientSession, op: Any) -> None:
+    name = topic_name(ctx, op.topic)
+    graph = ctx.state.graph
+    if op.type is not None:
+        declare(ctx, name, message_type(ctx, op.type))
+    entry = graph.topics.get(name)
+    if entry is None or entry.type_name is None:
+        raise OpFailure(f"Cannot infer topic type for topic {name} as it is not yet advertised")
+    subscription = session.subscriptions.get(name)
+    is_new = subscription is None
+    if subscription is None:
+        subscription = session.subscriptions[name] = Subscription(name, op.topic)
+        ctx.state.topic_subscriptions.setdefault(name, {})[session.client_id] = subscription
+        graph.add_subscriber(name, session.node)
+    subscription.spelling = op.topic
+    subscription.set_id(id_key(op.id), subscribe_settings(op))
+    if is_new and entry.latched is not None:
+        ctx.release(session, subscription, subscription.offer(entry.latched, ctx.now_ns))
+    else:
+        ctx.release(session, subscription, subscription.release(ctx.now_ns))
+
+
+def handle_unsubscribe(ctx: Context, session: ClientSession, op: Any) -> None:
+    name = absolute_name(op.topic)
+    subscription = session.subscriptions.get(name)
+    if subscription is None:
+        return
+    if op.id is None:
+        subscription.ids.clear()
+    else:
+        subscription.remove_id(id_key(op.id))
+    if not subscription.ids:
+        drop_subscription(ctx, session, name)
+    else:
+        ctx.release(session, subscription, subscription.release(ctx.now_ns))
+
+
+def drop_subscription(ctx: Context, session: ClientSession, name: str) -> None:
+    """Forget the client's subscription to `name` and its place in the graph."""
+    session.subscriptions.pop(name, None)
+    by_client = ctx.state.topic_subscriptions.get(name, {})
+    by_client.pop(session.client_id, None)
+    if not by_client:
+        ctx.state.topic_subscriptions.pop(name, None)
+    ctx.state.graph.remove_subscriber(name, session.node)
+
+
+def release_client(ctx: Context, session: ClientSession) -> None:
+    """Disconnect clean-up: every subscription and advertisement of the client."""
+    for name in list(session.subscriptions):
+        drop_subscription(ctx, session, name)
+    for name in list(session.published):
+        ctx.state.graph.remove_publisher(name, session.node)
+    session.published.clear()
+
+
+def on_release_deadline(ctx: Context, client_id: int, topic: str) -> None:
+    """A throttled subscription's next queued message may leave now."""
+    session = ctx.state.sessions.get(client_id)
+    subscription = session.subscriptions.get(topic) if session else None
+    if session is not None and subscription is not None:
+        ctx.release(session, subscription, subscription.release(ctx.now_ns))
+
+
+HANDLERS = {
+    "advertise": handle_advertise,
+    "unadvertise": handle_unadvertise,
+    "publish": handle_publish,
+    "subscribe": handle_subscribe,
+    "unsubscribe": handle_unsubscribe,
+}

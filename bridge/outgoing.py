@@ -1,0 +1,163 @@
+"""Outgoing items and their wire frames, encoded once and shared by every recipient.
+
+A `TopicMessage` is one message published on a topic. Its frames are computed lazily, at
+most once per (encoding, topic spelling), under a lock so that worker threads rendering the
+same message for several subscribers wait for one encode instead of repeating it. The edge
+renders items whose payload is large in a thread pool, off the event loop.
+"""
+
+from __future__ import annotations
+
+import threading
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from schemas import codec_json
+from schemas.codec_cdr import to_cdr
+from schemas.codec_png import encode_png_op
+from schemas.frames import publish_cbor, publish_cbor_raw, publish_json
+from schemas.registry import TypeRegistry
+
+JSON = "none"
+PNG = "png"
+CBOR = "cbor"
+CBOR_RAW = "cbor-raw"
+# Subscription compression precedence (protocol §4.4): the strongest wins among a client's ids.
+COMPRESSION_RANK = {JSON: 0, PNG: 1, CBOR: 2, CBOR_RAW: 3}
+
+
+@dataclass(frozen=True, slots=True)
+class WireFrame:
+    """One websocket frame: `data` is UTF-8 JSON when `text`, else binary (CBOR)."""
+
+    data: bytes
+    text: bool
+
+
+def payload_size(value: Any) -> int:
+    """Rough byte count of the bulk data in a canonical message (bytes and ndarrays).
+
+    Walks message structure only (dicts and lists of dicts), never array elements.
+    """
+    if isinstance(value, bytes | bytearray):
+        return len(value)
+    if isinstance(value, np.ndarray):
+        return int(value.nbytes)
+    if isinstance(value, dict):
+        return sum(payload_size(v) for v in value.values())
+    if isinstance(value, list) and value and isinstance(value[0], dict | bytes | np.ndarray):
+        return sum(payload_size(v) for v in value)
+    return 0
+
+
+class TopicMessage:
+    """A canonical message published on `topic`, with per-encoding frames cached.
+
+    `stamp_ns` is the bridge wall-clock time the message entered the graph; it fills the
+    `secs`/`nsecs` of cbor-raw frames. `cdr` may be given by a middleware source that already
+    holds the serialized form (then cbor-raw needs no encode).
+    """
+
+    __slots__ = ("_frames", "_lock", "cdr", "msg", "registry", "size_hint", "stamp_ns",
+                 "topic", "type_name")
+
+    def __init__(self, topic: str, type_name: str, msg: dict[str, Any], stamp_ns: int,
+                 registry: TypeRegistry, cdr: bytes | None = None) -> None:
+        self.topic = topic
+        self.type_name = type_name
+        self.msg = msg
+        self.stamp_ns = stamp_ns
+        self.registry = registry
+        self.cdr = cdr
+        self.size_hint = payload_size(msg)
+        self._frames: dict[tuple[str, str], WireFrame] = {}
+        self._lock = threading.RLock()  # png re-enters for the JSON frame
+
+    def frame(self, encoding: str, topic: str) -> WireFrame:
+        """The `publish` frame for `encoding` naming the topic as `topic` (thread-safe)."""
+        key = (encoding, topic)
+        cached = self._frames.get(key)
+        if cached is not None:
+            return cached
+        with self._lock:
+            cached = self._frames.get(key)
+            if cached is None:
+                cached = self._encode(encoding, topic)
+                self._frames[key] = cached
+        return cached
+
+    def _encode(self, encoding: str, topic: str) -> WireFrame:
+        if encoding == CBOR:
+            return WireFrame(publish_cbor(topic, self.msg), text=False)
+        if encoding == CBOR_RAW:
+            if self.cdr is None:
+                self.cdr = to_cdr(self.registry, self.type_name, self.msg)
+            return WireFrame(publish_cbor_raw(topic, self.cdr, self.stamp_ns), text=False)
+        if encoding == PNG:
+            return WireFrame(encode_png_op(self.frame(JSON, topic).data), text=True)
+        return WireFrame(publish_json(topic, self.msg), text=True)
+
+
+@dataclass(frozen=True, slots=True)
+class Delivery:
+    """A topic message for one client: its topic spelling and chosen encoding."""
+
+    message: TopicMessage
+    topic: str
+    encoding: str
+
+    @property
+    def size_hint(self) -> int:
+        return self.message.size_hint
+
+    @property
+    def message_id(self) -> Any:
+        return None
+
+    def frame(self) -> WireFrame:
+        return self.message.frame(self.encoding, self.topic)
+
+
+@dataclass(frozen=True, slots=True)
+class ControlMessage:
+    """A small JSON op for one client (service_response, call_service, action ops, status)."""
+
+    payload: dict[str, Any]
+
+    @property
+    def size_hint(self) -> int:
+        return payload_size(self.payload)
+
+    @property
+    def message_id(self) -> Any:
+        return self.payload.get("id")
+
+    def frame(self) -> WireFrame:
+        return WireFrame(codec_json.dumps(self.payload), text=True)
+
+
+Outgoing = Delivery | ControlMessage
+
+
+def render(item: Outgoing, fragment_size: int | None, fallback_id: str) -> list[WireFrame]:
+    """The frames that carry `item`, split into `fragment` ops when text exceeds the size.
+
+    `fragment_size` counts characters of the JSON text (ASCII, so bytes); binary frames are
+    never fragmented (protocol §2.10). Fragments carry the message's own id, else
+    `fallback_id`, and an integer `total`.
+    """
+    frame = item.frame()
+    if fragment_size is None or not frame.text or len(frame.data) <= fragment_size:
+        return [frame]
+    text = frame.data.decode("ascii")
+    message_id = item.message_id
+    fragment_id = fallback_id if message_id is None else message_id
+    total = -(-len(text) // fragment_size)
+    return [
+        WireFrame(codec_json.dumps({"op": "fragment", "id": fragment_id,
+                                    "data": text[i * fragment_size:(i + 1) * fragment_size],
+                                    "num": i, "total": total}), text=True)
+        for i in range(total)
+    ]

@@ -1,0 +1,68 @@
+"""rosapi parameter services, kept in the bridge (ROS 2 names look like `/node:param`).
+
+Values are JSON text both ways, as rosapi clients `json.loads` / `JSON.parse` them.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from bridge.context import Context
+from bridge.errors import RosapiError
+from bridge.rosapi.common import table, text_arg
+from schemas import codec_json
+from schemas.errors import DecodeError
+
+PREFIX = "/rosapi"
+
+
+def param_name(request: dict[str, Any]) -> str:
+    name = text_arg(request, "name")
+    if not name:
+        raise RosapiError("parameter name must not be empty")
+    return name
+
+
+def get_param(ctx: Context, request: dict[str, Any]) -> dict[str, Any]:
+    name = param_name(request)
+    if name in ctx.state.params:
+        return {"value": ctx.state.params[name], "successful": True, "reason": ""}
+    default = text_arg(request, "default_value")
+    if default:
+        return {"value": default, "successful": True, "reason": ""}
+    return {"value": "null", "successful": False, "reason": f"Parameter {name} is not set"}
+
+
+def set_param(ctx: Context, request: dict[str, Any]) -> dict[str, Any]:
+    name = param_name(request)
+    value = text_arg(request, "value")
+    try:
+        codec_json.loads(value.encode())
+    except DecodeError as exc:
+        raise RosapiError(f"value of {name} is not JSON text: {exc}") from exc
+    ctx.state.params[name] = value
+    return {"successful": True, "reason": ""}
+
+
+def has_param(ctx: Context, request: dict[str, Any]) -> dict[str, Any]:
+    return {"exists": param_name(request) in ctx.state.params}
+
+
+def delete_param(ctx: Context, request: dict[str, Any]) -> dict[str, Any]:
+    name = param_name(request)
+    if ctx.state.params.pop(name, None) is None:
+        return {"successful": False, "reason": f"Parameter {name} is not set"}
+    return {"successful": True, "reason": ""}
+
+
+def get_param_names(ctx: Context, request: dict[str, Any]) -> dict[str, Any]:
+    return {"names": sorted(ctx.state.params)}
+
+
+SERVICES = table(PREFIX, {
+    "get_param": ("GetParam", get_param),
+    "set_param": ("SetParam", set_param),
+    "has_param": ("HasParam", has_param),
+    "delete_param": ("DeleteParam", delete_param),
+    "get_param_names": ("GetParamNames", get_param_names),
+})

@@ -1,0 +1,18 @@
+"""Fixtures for the bridge tests."""
+
+from __future__ import annotations
+
+import pytest
+from bridge_harness import CoreHarness
+
+from schemas.registry import TypeRegistry
+
+
+@pytest.fixture(scope="session")
+def registry() -> TypeRegistry:
+    return TypeRegistry.with_defaults()
+
+
+@pytest.fixture
+def harness(registry: TypeRegistry) -> CoreHarness:
+    return CoreHarness(registry)
