@@ -1,0 +1,87 @@
+"""Frames on the wire: turning op dicts into websocket payloads and payloads back into ops.
+
+Pure functions with no state, safe to call from any thread: the client runs them on a worker
+thread for large frames so that a 4 MB scan's decode never holds up a 200-byte IMU sample on
+the event loop.
+
+Wire rules (reference/rosbridge-protocol.md §1, §4): JSON goes out in text frames; CBOR goes
+out in binary frames (the riverbridge bridge accepts CBOR from clients); a binary frame from
+the server is CBOR, except that a binary frame whose first non-blank byte is ``{`` is JSON (ROS#
+style). A ``png`` op is unwrapped here into the op it carries.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from clients.errors import ProtocolError
+from schemas import codec_cbor, codec_json
+from schemas.codec_png import decode_png_data
+from schemas.errors import SchemaError
+
+_JSON_LEAD_BYTES = frozenset(b" \t\r\n{")
+"""First bytes of a JSON object text; a CBOR map (major type 5) starts with 0xa0-0xbf."""
+
+
+@dataclass(frozen=True, slots=True)
+class Frame:
+    """One outgoing websocket message: ``data`` sent as a text frame when ``text`` is true."""
+
+    data: bytes
+    text: bool
+
+    @property
+    def wire_bytes(self) -> int:
+        """Payload length in bytes (websocket framing overhead not counted)."""
+        return len(self.data)
+
+
+def json_frame(op: dict[str, Any]) -> Frame:
+    """Encode a control op (subscribe, call_service, ...) as a JSON text frame."""
+    return Frame(codec_json.dumps(op), text=True)
+
+
+def decode_frame(data: bytes | bytearray | memoryview | str) -> dict[str, Any]:
+    """Decode one websocket payload into an op dict.
+
+    ``str`` payloads (text frames) are JSON; bytes payloads are CBOR unless they look like JSON.
+    A ``png`` op is replaced by the op it encodes. Raises :class:`ProtocolError` when the
+    payload is not an object with a string ``op``.
+    """
+    try:
+        if isinstance(data, str):
+            op = codec_json.loads(data)
+        elif len(data) > 0 and data[0] in _JSON_LEAD_BYTES:
+            op = codec_json.loads(bytes(data))
+        else:
+            op = codec_cbor.loads(bytes(data))
+        if isinstance(op, dict) and op.get("op") == "png":
+            op = codec_json.loads(decode_png_data(op["data"]))
+    except (SchemaError, ValueError, KeyError, TypeError) as exc:
+        raise ProtocolError(f"undecodable frame of {len(data)} bytes: {exc}") from exc
+    if not isinstance(op, dict) or not isinstance(op.get("op"), str):
+        raise ProtocolError(f"frame is not an op object: {str(op)[:80]!r}")
+    return op
+
+
+def payload_bytes(value: Any) -> int:
+    """Rough size in bytes of the array payload of a message (bytes and ndarray fields).
+
+    Walks nested dicts and lists of dicts (fields, not elements of numeric arrays), so its
+    cost depends on the message's structure, never on the number of points it carries. Used
+    to decide whether encoding is worth moving off the event loop.
+    """
+    if isinstance(value, bytes | bytearray | memoryview):
+        return len(value)
+    if isinstance(value, np.ndarray):
+        return int(value.nbytes)
+    if isinstance(value, dict):
+        return sum(payload_bytes(item) for item in value.values())
+    if isinstance(value, list) and value and isinstance(value[0], dict | bytes | np.ndarray):
+        return sum(payload_bytes(item) for item in value)
+    if isinstance(value, str):
+        return len(value)
+    return 0
