@@ -1,0 +1,118 @@
+"""Canonical ROS message dicts (docs/messages.md) for the simulator's outputs.
+
+Every builder takes the capture time `stamp_ns` (wall-clock nanoseconds) from its caller; the
+numeric core never reads a clock. `uint8[]` fields are `bytes`, numeric sequences 1-D numpy
+arrays of the exact dtype, fixed-size arrays (covariances) lists of Python floats.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from simulator.frames import Pose2D, quaternion_from_yaw
+
+POINTFIELD_FLOAT32 = 7  # sensor_msgs/msg/PointField.FLOAT32
+POINT_FIELDS = ("x", "y", "z", "intensity")
+MAP_FRAME = "map"
+BASE_FRAME = "base_link"
+
+
+def stamp(stamp_ns: int) -> dict:
+    """builtin_interfaces/msg/Time from integer nanoseconds."""
+    sec, nanosec = divmod(int(stamp_ns), 1_000_000_000)
+    return {"sec": sec, "nanosec": nanosec}
+
+
+def header(stamp_ns: int, frame_id: str) -> dict:
+    return {"stamp": stamp(stamp_ns), "frame_id": frame_id}
+
+
+def vector3(xyz) -> dict:
+    return {"x": float(xyz[0]), "y": float(xyz[1]), "z": float(xyz[2])}
+
+
+def quaternion(xyzw) -> dict:
+    return {"x": float(xyzw[0]), "y": float(xyzw[1]), "z": float(xyzw[2]), "w": float(xyzw[3])}
+
+
+def diagonal_covariance(variances) -> list[float]:
+    """Row-major n x n covariance with `variances` on the diagonal, as a list of floats."""
+    return [float(v) for v in np.diag(np.asarray(variances, dtype=np.float64)).ravel()]
+
+
+def point_cloud2(points: np.ndarray, stamp_ns: int, frame_id: str) -> dict:
+    """sensor_msgs/msg/PointCloud2 of x, y, z, intensity float32 (16-byte points, unordered).
+
+    points : (n, 4) float32, C-contiguous; its buffer becomes `data` in one copy.
+    """
+    points = np.ascontiguousarray(points, dtype="<f4")
+    if points.ndim != 2 or points.shape[1] != 4:
+        raise ValueError(f"points must be (n, 4), got {points.shape}")
+    n = len(points)
+    return {
+        "header": header(stamp_ns, frame_id),
+        "height": 1,
+        "width": n,
+        "fields": [
+            {"name": name, "offset": 4 * k, "datatype": POINTFIELD_FLOAT32, "count": 1}
+            for k, name in enumerate(POINT_FIELDS)
+        ],
+        "is_bigendian": False,
+        "point_step": 16,
+        "row_step": 16 * n,
+        "data": points.tobytes(),
+        "is_dense": True,
+    }
+
+
+def compressed_image(jpeg: bytes, stamp_ns: int, frame_id: str) -> dict:
+    """sensor_msgs/msg/CompressedImage holding one JPEG."""
+    return {"header": header(stamp_ns, frame_id), "format": "jpeg", "data": bytes(jpeg)}
+
+
+def transform_stamped(stamp_ns: int, parent: str, child: str, translation, rotation_xyzw) -> dict:
+    """geometry_msgs/msg/TransformStamped from `parent` to `child`."""
+    return {
+        "header": header(stamp_ns, parent),
+        "child_frame_id": child,
+        "transform": {"translation": vector3(translation), "rotation": quaternion(rotation_xyzw)},
+    }
+
+
+def tf_message(transforms: list[dict]) -> dict:
+    """tf2_msgs/msg/TFMessage."""
+    return {"transforms": transforms}
+
+
+def vessel_tf(pose: Pose2D, water_level_m: float, stamp_ns: int) -> dict:
+    """TFMessage map -> base_link for the vessel at `pose`."""
+    translation = (pose.x_m, pose.y_m, water_level_m)
+    return tf_message([transform_stamped(stamp_ns, MAP_FRAME, BASE_FRAME, translation,
+                                         quaternion_from_yaw(pose.yaw_rad))])
+
+
+def odometry(
+    pose: Pose2D, water_level_m: float, velocity_body, yaw_rate_radps: float, stamp_ns: int
+) -> dict:
+    """nav_msgs/msg/Odometry ground truth: pose in `map`, twist in `base_link` (exact: zero cov).
+
+    velocity_body : (surge u, sway v) m/s.
+    """
+    return {
+        "header": header(stamp_ns, MAP_FRAME),
+        "child_frame_id": BASE_FRAME,
+        "pose": {
+            "pose": {
+                "position": {"x": float(pose.x_m), "y": float(pose.y_m), "z": float(water_level_m)},
+                "orientation": quaternion(quaternion_from_yaw(pose.yaw_rad)),
+            },
+            "covariance": [0.0] * 36,
+        },
+        "twist": {
+            "twist": {
+                "linear": vector3((velocity_body[0], velocity_body[1], 0.0)),
+                "angular": vector3((0.0, 0.0, yaw_rate_radps)),
+            },
+            "covariance": [0.0] * 36,
+        },
+    }

@@ -1,0 +1,82 @@
+"""Fixtures for the simulator tests: known-geometry scenes and a canonical-form checker."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+import pytest
+import trimesh
+
+from schemas.codec_cdr import from_cdr, to_cdr
+from schemas.message import normalize
+from schemas.registry import TypeRegistry
+from simulator.config import SceneConfig
+from simulator.materials import Material
+from simulator.props import MeshPart
+from simulator.scene import Scene, build_scene
+
+WALL = Material("wall", radar_reflectance=7.0, lidar_reflectivity=0.8, colour_rgb=(200, 40, 30))
+
+
+def box_part(lower, upper, material: Material = WALL) -> MeshPart:
+    """An axis-aligned box from corner `lower` to corner `upper` (map frame, metres)."""
+    lower, upper = np.asarray(lower, float), np.asarray(upper, float)
+    box = trimesh.creation.box(extents=upper - lower)
+    box.apply_translation((lower + upper) / 2)
+    return MeshPart(np.asarray(box.vertices), np.asarray(box.faces), material)
+
+
+def box_scene(lower, upper, material: Material = WALL) -> Scene:
+    """A scene holding one box and nothing else (no terrain, no water surface)."""
+    return Scene([box_part(lower, upper, material)], water_level_m=0.0)
+
+
+@pytest.fixture(scope="session")
+def small_scene() -> Scene:
+    """The procedural thesis scene at a coarse terrain resolution (fast to build)."""
+    return build_scene(SceneConfig(terrain_cells=120, trees=20, houses=5), seed=3)
+
+
+def assert_same(expected: Any, actual: Any, path: str = "msg") -> None:
+    """Deep equality that also demands equal Python types and ndarray dtypes."""
+    if isinstance(expected, np.ndarray):
+        assert isinstance(actual, np.ndarray), f"{path}: {type(actual).__name__} not ndarray"
+        assert actual.dtype == expected.dtype, f"{path}: dtype {actual.dtype} != {expected.dtype}"
+        np.testing.assert_array_equal(actual, expected, err_msg=path)
+        return
+    assert type(actual) is type(expected), (
+        f"{path}: {type(actual).__name__} != {type(expected).__name__}"
+    )
+    if isinstance(expected, dict):
+        assert actual.keys() == expected.keys(), f"{path}: keys differ"
+        for key in expected:
+            assert_same(expected[key], actual[key], f"{path}.{key}")
+    elif isinstance(expected, list):
+        assert len(actual) == len(expected), f"{path}: length differs"
+        for i, (e, a) in enumerate(zip(expected, actual, strict=True)):
+            assert_same(e, a, f"{path}[{i}]")
+    elif isinstance(expected, float) and math.isnan(expected):
+        assert math.isnan(actual), path
+    else:
+        assert actual == expected, f"{path}: {actual!r} != {expected!r}"
+
+
+@pytest.fixture(scope="session")
+def registry() -> TypeRegistry:
+    return TypeRegistry.with_defaults()
+
+
+@pytest.fixture(scope="session")
+def check_canonical(registry: TypeRegistry) -> Callable[[str, dict], None]:
+    """Assert a message dict is already canonical (normalising it changes nothing, no field is
+    missing or extra) and survives a CDR round trip unchanged."""
+
+    def check(type_name: str, msg: dict) -> None:
+        spec = registry.message(type_name)
+        assert_same(msg, normalize(spec, msg, now_ns=0))
+        assert_same(msg, from_cdr(registry, type_name, to_cdr(registry, type_name, msg)))
+
+    return check
