@@ -1,0 +1,5 @@
+"""``python -m navigation``."""
+
+from navigation.cli import main
+
+raise SystemExit(main())

@@ -1,0 +1,162 @@
+"""CFAR detection along range, all beams at once (thesis 2.5.2-2.5.4, table 4.2).
+
+The image is power : (beams, cells) float, one row per azimuth beam, one column per range
+cell. For each cell under test (CUT) the reference cells are ``n`` training cells on each
+side beyond ``g`` guard cells. Side sums come from one cumulative sum per image; OS-CFAR
+partitions a strided window view. Near the ends of a row only one side is complete: those
+cells use that side alone, with the factor solved for ``n`` cells, so the false-alarm rate
+holds there too; cells with no complete side (rows shorter than 2 (n+g) + 1) never detect.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.lib.stride_tricks import sliding_window_view
+
+from navigation.cfar_pfa import ca_factor, detector_factor, os_pfa, solve_factor
+from navigation.config import CfarConfig
+
+log = logging.getLogger(__name__)
+
+
+@dataclass(frozen=True)
+class CfarDetector:
+    """A configured detector with its threshold factors solved once.
+
+    factor : multiplies the noise estimate where both sides are complete.
+    edge_factor : multiplies the one-sided estimate near the row ends.
+    """
+
+    kind: str
+    n_side: int
+    n_guard: int
+    false_alarm_rate: float
+    rank: int
+    edge_rank: int
+    factor: float
+    edge_factor: float
+
+    @classmethod
+    def from_config(cls, config: CfarConfig, num_cells: int | None = None) -> CfarDetector:
+        """Solve the factors for ``config``. Given ``num_cells``, the training window shrinks
+        (with a warning) until one full window fits in a row: the simulator's default radar
+        has 25 cells of 4 m (thesis table 4.1), too short for table 4.2's 2 x 50 cells."""
+        n = config.training_cells_per_side
+        if num_cells is not None:
+            n = _fitting_side(n, config.guard_cells_per_side, num_cells)
+        rank = config.os_rank if config.os_rank is not None else max(1, (3 * 2 * n) // 4)
+        rank = min(rank, 2 * n)
+        edge_rank = max(1, min(n, round(rank / 2)))
+        pfa = config.false_alarm_rate
+        factor = detector_factor(config.detector, pfa, n, rank)
+        if config.detector == "os":
+            edge_factor = solve_factor(lambda a: os_pfa(a, n, edge_rank), pfa)
+        else:
+            edge_factor = ca_factor(pfa, n)  # one side alone is a CA over n cells
+        return cls(
+            config.detector,
+            n,
+            config.guard_cells_per_side,
+            pfa,
+            rank,
+            edge_rank,
+            factor,
+            edge_factor,
+        )
+
+    def threshold(self, power: np.ndarray) -> np.ndarray:
+        """Detection threshold per cell: (beams, cells) -> (beams, cells) float32, +inf where
+        no reference side is complete."""
+        power = np.asarray(power, dtype=np.float32)
+        lead, lag = side_sums(power, self.n_side, self.n_guard)
+        if self.kind == "os":
+            noise_both, noise_lead, noise_lag = self._os_estimates(power)
+        else:
+            noise_lead = lead / self.n_side
+            noise_lag = lag / self.n_side
+            noise_both = _COMBINE_SIDES[self.kind](noise_lead, noise_lag)
+        out = np.where(np.isnan(lead), noise_lag, noise_lead) * self.edge_factor
+        both = ~(np.isnan(lead) | np.isnan(lag))
+        out[both] = self.factor * noise_both[both]
+        out[np.isnan(out)] = np.inf
+        return out.astype(np.float32)
+
+    def detect(self, power: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Cells whose power exceeds the threshold: mask (beams, cells) bool, threshold."""
+        threshold = self.threshold(power)
+        return np.asarray(power) > threshold, threshold
+
+    def _os_estimates(self, power: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Order statistics: rank-th of both sides, edge_rank-th of each side alone."""
+        n, g = self.n_side, self.n_guard
+        beams, cells = power.shape
+        both = np.full((beams, cells), np.nan)
+        lead = np.full((beams, cells), np.nan)
+        lag = np.full((beams, cells), np.nan)
+        span = 2 * (n + g) + 1
+        if cells >= span:
+            windows = sliding_window_view(power, span, axis=1)
+            training = np.concatenate([windows[..., :n], windows[..., n + 2 * g + 1 :]], axis=-1)
+            both[:, n + g : cells - n - g] = _kth_smallest(training, self.rank)
+        if cells >= n + g + 1:
+            # Only cells missing the other side need a one-sided estimate.
+            sides = sliding_window_view(power, n, axis=1)  # sides[:, s] covers s .. s+n-1
+            lag_cells = np.arange(min(n + g, cells - n - g))  # no complete lead side
+            lead_cells = np.arange(max(cells - n - g, n + g), cells)  # no complete lag side
+            lag[:, lag_cells] = _kth_smallest(sides[:, lag_cells + g + 1], self.edge_rank)
+            lead[:, lead_cells] = _kth_smallest(sides[:, lead_cells - g - n], self.edge_rank)
+        return both, lead, lag
+
+
+def _fitting_side(n_side: int, n_guard: int, num_cells: int) -> int:
+    """Training cells per side that fit a row of ``num_cells`` around the guard cells."""
+    fits = (num_cells - 1) // 2 - n_guard
+    if fits < 1:
+        raise ValueError(f"{num_cells} cells cannot hold {n_guard} guard cells on each side")
+    if fits < n_side:
+        log.warning(
+            "CFAR: %d range cells hold only %d training cells per side (configured %d)",
+            num_cells,
+            fits,
+            n_side,
+        )
+    return min(n_side, fits)
+
+
+def _mean(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    return 0.5 * (a + b)
+
+
+# How CA, SOCA and GOCA turn the two side means into one noise estimate (thesis eq. 2.5.12).
+_COMBINE_SIDES: dict[str, Callable[[np.ndarray, np.ndarray], np.ndarray]] = {
+    "ca": _mean,
+    "soca": np.fmin,
+    "goca": np.fmax,
+}
+
+
+def _kth_smallest(windows: np.ndarray, rank: int) -> np.ndarray:
+    """rank-th smallest (1-based) along the last axis: (..., w) -> (...)."""
+    return np.partition(windows, rank - 1, axis=-1)[..., rank - 1]
+
+
+def side_sums(power: np.ndarray, n_side: int, n_guard: int) -> tuple[np.ndarray, np.ndarray]:
+    """Sums of the leading and lagging training windows of every cell.
+
+    power : (beams, cells) -> lead, lag : (beams, cells) float64, NaN where the window
+    leaves the row. Lead covers cells i-g-n .. i-g-1, lag covers i+g+1 .. i+g+n.
+    """
+    beams, cells = power.shape
+    n, g = n_side, n_guard
+    csum = np.zeros((beams, cells + 1), dtype=np.float64)
+    np.cumsum(power, axis=1, out=csum[:, 1:])
+    lead = np.full((beams, cells), np.nan)
+    lag = np.full((beams, cells), np.nan)
+    if cells > n + g:
+        lead[:, n + g :] = csum[:, n : cells - g] - csum[:, : cells - g - n]
+        lag[:, : cells - n - g] = csum[:, g + n + 1 :] - csum[:, g + 1 : cells - n + 1]
+    return lead, lag

@@ -1,0 +1,152 @@
+"""The navigation service's edge: rosbridge in, processing on worker threads, rosbridge out.
+
+Each heavy sensor (LIDAR, radar, camera) has its own subscription queue of one message and
+its own single worker thread, so a slow LIDAR step never delays the camera or the IMU (the
+IMU is cheap and handled on the event loop). A sensor that falls behind processes the newest
+message; the older ones are dropped by the queue and counted as skipped. The fused obstacle
+map and the diagnostics are published on timers.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import logging
+import time
+from collections.abc import Awaitable, Callable
+from concurrent.futures import ThreadPoolExecutor
+from typing import Any
+
+from clients import RosbridgeClient, Subscription
+from clients.protocol import Encoding
+from navigation.config import NavigationConfig
+from navigation.diagnostics import SensorCounters, diagnostic_array_msg
+from navigation.imu import ImuTracker
+from navigation.processors import (
+    OUTPUT_TYPES,
+    TOPIC_DIAGNOSTICS,
+    Outputs,
+    Processors,
+)
+
+log = logging.getLogger(__name__)
+
+SENSOR_INPUTS = {
+    "lidar": ("/lidar/points", "sensor_msgs/msg/PointCloud2"),
+    "radar": ("/radar/image", "riverbridge_msgs/msg/RadarImage"),
+    "camera": ("/camera/image/compressed", "sensor_msgs/msg/CompressedImage"),
+}
+IMU_INPUT = ("/imu/data", "sensor_msgs/msg/Imu")
+IMU_QUEUE = 1000  # IMU messages are tiny and every one counts for the gap statistics
+DIAGNOSTICS_PERIOD_S = 1.0
+
+
+class NavigationNode:
+    """Runs the processors against one connected client until ``stop`` is set."""
+
+    def __init__(
+        self,
+        client: RosbridgeClient,
+        config: NavigationConfig,
+        processors: Processors | None = None,
+    ) -> None:
+        self._client = client
+        self._config = config
+        self.processors = processors or Processors(config)
+        self.imu = ImuTracker(config.imu)
+        self.counters = {name: SensorCounters() for name in SENSOR_INPUTS}
+        self.subscriptions: dict[str, Subscription] = {}
+        self._executors = {
+            name: ThreadPoolExecutor(1, thread_name_prefix=f"nav-{name}") for name in SENSOR_INPUTS
+        }
+        self._handlers: dict[str, Callable[[dict[str, Any]], Outputs]] = {
+            "lidar": self.processors.lidar,
+            "radar": self.processors.radar,
+            "camera": self.processors.camera,
+        }
+
+    async def run(self, stop: asyncio.Event) -> None:
+        """Advertise, subscribe, process until ``stop`` is set, then release the threads."""
+        for topic, type_name in OUTPUT_TYPES.items():
+            await self._client.advertise(topic, type_name, latest_only=True)
+        for name, (topic, type_name) in SENSOR_INPUTS.items():
+            self.subscriptions[name] = await self._client.subscribe(topic, type_name, maxsize=1)
+        imu_topic, imu_type = IMU_INPUT
+        self.subscriptions["imu"] = await self._client.subscribe(
+            imu_topic, imu_type, maxsize=IMU_QUEUE
+        )
+        map_period_s = 1.0 / self._config.fusion.publish_rate_hz
+        tasks = [asyncio.create_task(self._sensor_loop(name)) for name in SENSOR_INPUTS]
+        tasks += [
+            asyncio.create_task(self._imu_loop()),
+            asyncio.create_task(_every(map_period_s, self._publish_map)),
+            asyncio.create_task(_every(DIAGNOSTICS_PERIOD_S, self._publish_diagnostics)),
+        ]
+        try:
+            await stop.wait()
+        finally:
+            for task in tasks:
+                task.cancel()
+            for task in tasks:
+                with contextlib.suppress(asyncio.CancelledError):
+                    await task
+            for executor in self._executors.values():
+                executor.shutdown(wait=True, cancel_futures=True)
+
+    async def _sensor_loop(self, name: str) -> None:
+        """Take the newest message, process it on the sensor's thread, publish the outputs."""
+        sub, counters = self.subscriptions[name], self.counters[name]
+        loop = asyncio.get_running_loop()
+        async for received in sub:
+            counters.skipped = sub.dropped
+            start = time.perf_counter()
+            try:
+                outputs = await loop.run_in_executor(
+                    self._executors[name], self._handlers[name], received.msg
+                )
+            except Exception:  # one bad message must not end the sensor's loop
+                counters.failed += 1
+                log.exception("%s: processing a message from %s failed", name, sub.topic)
+                continue
+            counters.record((time.perf_counter() - start) * 1e3)
+            for topic, msg in outputs:
+                await self._client.publish(topic, msg)
+
+    async def _imu_loop(self) -> None:
+        async for received in self.subscriptions["imu"]:
+            try:
+                self.imu.update(received.msg, received.recv_ns)
+            except (KeyError, TypeError, ValueError):
+                log.exception("imu: malformed message")
+
+    async def _publish_map(self) -> None:
+        for topic, msg in self.processors.obstacle_map():
+            await self._client.publish(topic, msg)
+
+    async def _publish_diagnostics(self) -> None:
+        for name, counters in self.counters.items():
+            counters.skipped = self.subscriptions[name].dropped
+        msg = diagnostic_array_msg(time.time_ns(), self.imu.snapshot(), self.counters)
+        await self._client.publish(TOPIC_DIAGNOSTICS, msg)
+
+
+async def _every(period_s: float, action: Callable[[], Awaitable[None]]) -> None:
+    """Call ``action`` every ``period_s`` on a fixed schedule (no drift), until cancelled."""
+    loop = asyncio.get_running_loop()
+    next_s = loop.time()
+    while True:
+        next_s += period_s
+        await asyncio.sleep(max(0.0, next_s - loop.time()))
+        try:
+            await action()
+        except Exception:
+            log.exception("periodic %s failed", getattr(action, "__name__", action))
+
+
+async def serve(
+    url: str, config: NavigationConfig, stop: asyncio.Event, *, encoding: Encoding = "cbor"
+) -> None:
+    """Connect to the bridge at ``url`` and run the navigation node until ``stop``."""
+    async with RosbridgeClient(url, encoding=encoding, name="navigation") as client:
+        log.info("navigation connected to %s (%s)", url, encoding)
+        await NavigationNode(client, config).run(stop)

@@ -1,0 +1,234 @@
+"""The navigation edge against a real bridge on 127.0.0.1, port 0."""
+
+from __future__ import annotations
+
+import asyncio
+import threading
+from collections.abc import AsyncIterator
+from typing import Any
+
+import cv2
+import numpy as np
+import pytest
+from nav_scenes import default_scene, lidar_directions, radar_noise_image, raycast
+
+from clients import RosbridgeClient
+from navigation.cli import main
+from navigation.config import NavigationConfig
+from navigation.messages import header_msg
+from navigation.node import NavigationNode, serve
+from navigation.pointcloud import pointcloud2_msg
+from navigation.processors import Processors
+
+pytestmark = pytest.mark.slow
+WAIT_S = 30.0
+
+
+@pytest.fixture
+async def bridge_url() -> AsyncIterator[str]:
+    from bridge.config import BridgeConfig
+    from bridge.server import run_bridge
+
+    async with run_bridge(BridgeConfig(host="127.0.0.1", port=0)) as running:
+        yield running.url
+
+
+@pytest.fixture
+async def peer(bridge_url: str) -> AsyncIterator[RosbridgeClient]:
+    """The other side: publishes sensor data, subscribes to the navigation outputs."""
+    async with RosbridgeClient(bridge_url, encoding="cbor", connect_timeout=5.0) as client:
+        for topic, type_name in INPUTS.items():
+            await client.advertise(topic, type_name)
+        yield client
+
+
+INPUTS = {
+    "/lidar/points": "sensor_msgs/msg/PointCloud2",
+    "/radar/image": "riverbridge_msgs/msg/RadarImage",
+    "/camera/image/compressed": "sensor_msgs/msg/CompressedImage",
+    "/imu/data": "sensor_msgs/msg/Imu",
+}
+
+
+def scan_msg(stamp_ns: int) -> dict[str, Any]:
+    points, _ = raycast(default_scene(), lidar_directions(0.25, 0.25))
+    return pointcloud2_msg(points, stamp_ns, "lidar")
+
+
+def radar_msg(stamp_ns: int) -> dict[str, Any]:
+    power = radar_noise_image(72, 800, 1.0, seed=1)
+    power[18, 400] = 500.0  # 90 deg, 100.125 m
+    return {
+        "header": header_msg(stamp_ns, "radar"),
+        "azimuth_min_rad": 0.0,
+        "azimuth_step_rad": float(np.float32(np.deg2rad(5.0))),
+        "beam_width_azimuth_rad": float(np.float32(np.deg2rad(5.0))),
+        "beam_width_elevation_rad": float(np.float32(np.deg2rad(15.0))),
+        "range_min_m": 0.0,
+        "range_step_m": 0.25,
+        "num_beams": 72,
+        "num_cells": 800,
+        "reflectance": power.reshape(-1),
+    }
+
+
+def camera_msg(stamp_ns: int) -> dict[str, Any]:
+    image = np.full((480, 640, 3), 30, np.uint8)
+    cv2.line(image, (0, 300), (639, 300), (255, 255, 255), 3)
+    jpeg = cv2.imencode(".jpg", image)[1].tobytes()
+    return {"header": header_msg(stamp_ns, "camera"), "format": "jpeg", "data": jpeg}
+
+
+def imu_msg(stamp_ns: int) -> dict[str, Any]:
+    return {
+        "header": header_msg(stamp_ns, "imu"),
+        "orientation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0},
+        "orientation_covariance": [0.0] * 9,
+        "angular_velocity": {"x": 0.0, "y": 0.0, "z": 0.01},
+        "angular_velocity_covariance": [0.0] * 9,
+        "linear_acceleration": {"x": 0.0, "y": 0.0, "z": 9.81},
+        "linear_acceleration_covariance": [0.0] * 9,
+    }
+
+
+async def first(sub, predicate=lambda msg: True) -> dict[str, Any]:
+    async def find() -> dict[str, Any]:
+        async for received in sub:
+            if predicate(received.msg):
+                return received.msg
+        raise AssertionError("subscription ended")
+
+    return await asyncio.wait_for(find(), WAIT_S)
+
+
+async def wait_until(condition, what: str) -> None:
+    async def poll() -> None:
+        while not condition():
+            await asyncio.sleep(0.02)
+
+    try:
+        await asyncio.wait_for(poll(), WAIT_S)
+    except TimeoutError:
+        raise AssertionError(f"timed out waiting for {what}") from None
+
+
+async def test_sensor_data_in_navigation_outputs_out(bridge_url, peer):
+    stop = asyncio.Event()
+    node_task = asyncio.create_task(serve(bridge_url, NavigationConfig(), stop))
+    subs = {
+        name: await peer.subscribe(f"/nav/{name}", type_name)
+        for name, type_name in [
+            ("boxes", "riverbridge_msgs/msg/BoxArray"),
+            ("markers", "visualization_msgs/msg/MarkerArray"),
+            ("radar_detections", "riverbridge_msgs/msg/RadarDetectionArray"),
+            ("lines", "riverbridge_msgs/msg/ImageLineArray"),
+            ("obstacle_map", "nav_msgs/msg/OccupancyGrid"),
+            ("diagnostics", "diagnostic_msgs/msg/DiagnosticArray"),
+        ]
+    }
+    try:
+        await asyncio.sleep(0.5)  # let the node subscribe before the first publish
+        stamp = 1_000_000_000
+        scan, radar, camera = scan_msg(stamp), radar_msg(stamp), camera_msg(stamp)
+        for i in range(20):
+            await peer.publish("/imu/data", imu_msg(stamp + i * 10_000_000))
+        await peer.publish("/lidar/points", scan)
+        await peer.publish("/radar/image", radar)
+        await peer.publish("/camera/image/compressed", camera)
+
+        boxes = await first(subs["boxes"])
+        assert boxes["num_clusters"] == 8 and boxes["header"]["stamp"]["sec"] == 1
+        markers = await first(subs["markers"])
+        assert markers["markers"][0]["action"] == 3
+        assert len(markers["markers"]) == len(boxes["boxes"]) + 1
+        detections = await first(subs["radar_detections"])
+        xy = np.array([[d["x_m"], d["y_m"]] for d in detections["detections"]])
+        assert np.min(np.linalg.norm(xy - [0.0, 100.125], axis=1)) < 0.01
+        lines = await first(subs["lines"])
+        assert any(abs(line["theta_rad"] - np.pi / 2) < 0.02 for line in lines["lines"])
+        grid = await first(subs["obstacle_map"], lambda m: (m["data"] == 100).sum() > 10)
+        assert grid["info"]["width"] == 400 and grid["data"].dtype == np.int8
+        diagnostics = await first(
+            subs["diagnostics"], lambda m: m["status"][0]["message"] != "no message yet"
+        )
+        imu = {kv["key"]: kv["value"] for kv in diagnostics["status"][0]["values"]}
+        assert float(imu["rate_hz"]) == pytest.approx(100.0, rel=0.01)
+        assert imu["gaps"] == "0"
+    finally:
+        stop.set()
+        await asyncio.wait_for(node_task, WAIT_S)
+
+
+class BlockingLidar(Processors):
+    """Processors whose LIDAR step waits for a gate: a LIDAR that has fallen far behind."""
+
+    def __init__(self, config: NavigationConfig) -> None:
+        super().__init__(config)
+        self.gate = threading.Event()
+        self.entered = threading.Event()
+
+    def lidar(self, msg: dict[str, Any]):
+        self.entered.set()
+        self.gate.wait(WAIT_S)
+        return super().lidar(msg)
+
+
+async def test_slow_lidar_neither_delays_camera_and_imu_nor_queues_scans(bridge_url, peer):
+    config = NavigationConfig()
+    processors = BlockingLidar(config)
+    stop = asyncio.Event()
+    async with RosbridgeClient(bridge_url, connect_timeout=5.0, name="nav") as client:
+        node = NavigationNode(client, config, processors)
+        node_task = asyncio.create_task(node.run(stop))
+        try:
+            await wait_until(lambda: "lidar" in node.subscriptions, "node subscriptions")
+            await asyncio.sleep(0.3)
+            scan = scan_msg(1)
+            await peer.publish("/lidar/points", scan)
+            await wait_until(processors.entered.is_set, "the LIDAR step to start")
+            for _ in range(3):  # scans arriving while the first one is still processed
+                await peer.publish("/lidar/points", scan)
+            await peer.publish("/camera/image/compressed", camera_msg(2))
+            for i in range(10):
+                await peer.publish("/imu/data", imu_msg(i * 10_000_000))
+            await wait_until(lambda: node.counters["camera"].processed == 1, "camera")
+            await wait_until(lambda: node.imu.snapshot() is not None, "imu")
+            await wait_until(lambda: node.imu.snapshot().stamp_stats.count == 10, "imu")
+            await wait_until(lambda: node.subscriptions["lidar"].received == 4, "scans")
+            assert node.counters["lidar"].processed == 0
+            processors.gate.set()
+            await wait_until(lambda: node.counters["lidar"].processed == 2, "newest scan")
+            assert node.counters["lidar"].skipped == 2
+        finally:
+            processors.gate.set()
+            stop.set()
+            await asyncio.wait_for(node_task, WAIT_S)
+
+
+def test_cli_names_a_bad_config(tmp_path, caplog):
+    path = tmp_path / "nav.toml"
+    path.write_text("[lidar]\nepsilon = 1\n")
+    assert main(["--bridge", "ws://127.0.0.1:9", "--config", str(path)]) == 2
+    assert "epsilon" in caplog.text
+
+
+async def test_python_m_navigation_runs_and_stops_on_sigterm(bridge_url, peer):
+    import signal
+    import sys
+
+    diagnostics = await peer.subscribe("/nav/diagnostics", "diagnostic_msgs/msg/DiagnosticArray")
+    process = await asyncio.create_subprocess_exec(
+        sys.executable, "-m", "navigation", "--bridge", bridge_url, "--log-level", "WARNING"
+    )
+    try:
+        msg = await first(diagnostics)
+        names = [status["name"] for status in msg["status"]]
+        assert names == [
+            "navigation/imu",
+            "navigation/lidar",
+            "navigation/radar",
+            "navigation/camera",
+        ]
+    finally:
+        process.send_signal(signal.SIGTERM)
+        assert await asyncio.wait_for(process.wait(), WAIT_S) == 0
