@@ -1,0 +1,1 @@
+"""Compatibility tests: real third-party rosbridge clients against `python -m bridge`."""
