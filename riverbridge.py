@@ -13,7 +13,9 @@ import sys
 # subcommand -> (module with ``main(argv) -> int``, one-line help)
 SUBCOMMANDS: dict[str, tuple[str, str]] = {
     "bridge": ("bridge.cli", "run the rosbridge v2 websocket server"),
+    "sim": ("simulator.cli", "run the simulator (scene, vessel, sensors) against a bridge"),
     "nav": ("navigation.cli", "run the navigation service against a bridge"),
+    "up": ("clients.up_cli", "run bridge, simulator and navigation as three local processes"),
 }
 
 

@@ -6,9 +6,16 @@ cd "$(dirname "$0")/.."
 
 python3 -m pip install --quiet --disable-pip-version-check -e '.[test]'
 
-if ! command -v node >/dev/null 2>&1 || ! command -v npm >/dev/null 2>&1; then
-    echo "setup: installing Node.js and npm from Debian's packages" >&2
-    apt-get update -qq && apt-get install -y -qq nodejs npm >/dev/null
+# Debian packages: Node.js for the roslibjs tests, docker-compose to validate docker-compose.yml
+# (no Docker engine runs here; `docker-compose config` checks the file against the spec).
+missing=()
+command -v node >/dev/null 2>&1 || missing+=(nodejs)
+command -v npm >/dev/null 2>&1 || missing+=(npm)
+command -v docker-compose >/dev/null 2>&1 || missing+=(docker-compose)
+if [ ${#missing[@]} -gt 0 ]; then
+    echo "setup: installing ${missing[*]} from Debian's packages" >&2
+    apt-get update -qq
+    DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
 fi
 if [ -f tests/compat/js/package-lock.json ]; then
     npm ci --prefix tests/compat/js --no-audit --no-fund --loglevel=error

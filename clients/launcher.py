@@ -1,0 +1,418 @@
+"""Supervise the bridge, the simulator and the navigation service as three local processes.
+
+Design (asyncio subprocesses, one event loop, no threads of our own):
+
+- Each component runs as ``sys.executable -m <package> ...`` in its own process group
+  (``process_group=0``), so a terminal's Ctrl-C reaches only the supervisor, which then stops
+  the clients before the bridge (no reconnect noise) and signals whole groups. On Linux each
+  child also gets ``PR_SET_PDEATHSIG`` = SIGTERM, so even a SIGKILLed supervisor leaves nothing
+  running (the kernel signals the children when the forking thread, our event-loop thread,
+  dies).
+- A child's stdout and stderr are one pipe, read line by line and written with a ``[name]``
+  prefix (coloured only on a TTY) and a flush per line.
+- Readiness is checked, never slept on: the bridge's ``listening on ws://HOST:PORT`` line (it
+  also tells the port when ``--port 0``), then ``GET /version``; the simulator and navigation
+  are ready when every topic they publish has a publisher in ``/rosapi/publishers``
+  (:mod:`clients.healthcheck`).
+- Whatever ends the run (a signal, a child exiting, a start-up timeout), every child gets
+  SIGINT, then SIGTERM and SIGKILL after ``stop_timeout_s`` each.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import ctypes
+import ctypes.util
+import logging
+import os
+import re
+import signal
+import sys
+from collections.abc import Awaitable, Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Literal, TextIO, TypeVar
+
+from pydantic import BaseModel, ConfigDict, Field
+
+from clients.client import RosbridgeClient
+from clients.errors import RosbridgeError
+from clients.healthcheck import Unhealthy, fetch_version, missing_publishers
+
+log = logging.getLogger(__name__)
+T = TypeVar("T")
+
+BRIDGE_URL = "{bridge_url}"
+"""Placeholder in a component's arguments, replaced by the bridge's URL once it listens."""
+
+SIMULATOR_TOPICS = ("/lidar/points", "/radar/image", "/camera/image/compressed", "/imu/data",
+                    "/gnss/fix", "/odom", "/tf")
+NAVIGATION_TOPICS = ("/nav/boxes", "/nav/markers", "/nav/radar_detections", "/nav/lines",
+                     "/nav/obstacle_map", "/nav/diagnostics")
+
+# glibc malloc tuning for 4 MB sensor buffers: fresh mmap'd buffers cost ~3 ms of page faults
+# per scan (performance-measurements.md, page-fault note); these keep them on the heap.
+MALLOC_ENV: Mapping[str, str] = {
+    "MALLOC_MMAP_THRESHOLD_": "268435456",
+    "MALLOC_TRIM_THRESHOLD_": "1073741824",
+    "MALLOC_TOP_PAD_": "67108864",
+}
+
+_LISTENING = re.compile(rb"listening on ws://(?P<host>\S+?):(?P<port>\d+)")
+_POLL_S = 0.25  # readiness probe period: cheap (one rosapi round trip per topic)
+_LINE_LIMIT = 1 << 20  # longest log line read in one piece; longer ones are split
+_WILDCARD_TO_LOOPBACK = {"0.0.0.0": "127.0.0.1", "": "127.0.0.1", "::": "::1"}
+_COLOURS = {"bridge": "36", "sim": "32", "nav": "35", "up": "1"}  # ANSI: cyan, green, magenta
+
+
+class LaunchConfig(BaseModel):
+    """What ``riverbridge up`` starts. Defaults: rosbridge's usual port, CBOR (DESIGN §4)."""
+
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+    host: str = "127.0.0.1"
+    # rosbridge_server's default port; 0 lets the kernel pick a free one.
+    port: int = Field(default=9090, ge=0, le=65535)
+    encoding: Literal["json", "cbor"] = "cbor"  # binary frames: ~30x cheaper for a scan
+    sim_config: Path | None = None
+    nav_config: Path | None = None
+    # A loaded 2-core machine needs tens of seconds to import the stack and build the
+    # ~500k-triangle scene.
+    startup_timeout_s: float = Field(default=120.0, gt=0)
+    # Per escalation step (SIGINT, then SIGTERM, then SIGKILL); the parts stop in ~1 s.
+    stop_timeout_s: float = Field(default=10.0, gt=0)
+
+
+@dataclass(frozen=True)
+class Component:
+    """One child process: ``python -m module *args``; ready when ``topics`` have publishers
+    (for the bridge, which has none: when it listens and answers ``/version``)."""
+
+    name: str
+    title: str
+    module: str
+    args: tuple[str, ...]
+    topics: tuple[str, ...] = ()
+
+    def argv(self, bridge_url: str = "") -> list[str]:
+        return [sys.executable, "-m", self.module,
+                *(arg.replace(BRIDGE_URL, bridge_url) for arg in self.args)]
+
+
+def stack_components(config: LaunchConfig) -> tuple[Component, ...]:
+    """The bridge, the simulator and the navigation service for ``config``, in start order."""
+    sim_args = ["--bridge", BRIDGE_URL, "--encoding", config.encoding]
+    nav_args = list(sim_args)
+    if config.sim_config is not None:
+        sim_args += ["--config", str(config.sim_config)]
+    if config.nav_config is not None:
+        nav_args += ["--config", str(config.nav_config)]
+    return (
+        Component("bridge", "bridge", "bridge",
+                  ("--host", config.host, "--port", str(config.port))),
+        Component("sim", "simulator", "simulator", tuple(sim_args), SIMULATOR_TOPICS),
+        Component("nav", "navigation", "navigation", tuple(nav_args), NAVIGATION_TOPICS),
+    )
+
+
+def child_environment(base: Mapping[str, str] | None = None) -> dict[str, str]:
+    """``base`` (default ``os.environ``) plus unbuffered output and the malloc tuning."""
+    env = dict(os.environ if base is None else base)
+    env.update(MALLOC_ENV)
+    env["PYTHONUNBUFFERED"] = "1"
+    return env
+
+
+def connect_host(host: str) -> str:
+    """Where a local client connects to reach a server bound to ``host``."""
+    return _WILDCARD_TO_LOOPBACK.get(host, host)
+
+
+def ws_url(host: str, port: int) -> str:
+    return f"ws://[{host}]:{port}" if ":" in host else f"ws://{host}:{port}"
+
+
+def describe_exit(title: str, code: int) -> str:
+    """``"simulator exited with code 3"`` or ``"... was killed by SIGKILL (exit code -9)"``."""
+    if code < 0:
+        with contextlib.suppress(ValueError):
+            return f"{title} was killed by {signal.Signals(-code).name} (exit code {code})"
+    return f"{title} exited with code {code}"
+
+
+class ComponentDied(RuntimeError):
+    """A component exited while the stack was starting or running."""
+
+    def __init__(self, title: str, code: int) -> None:
+        super().__init__(describe_exit(title, code))
+        self.title, self.code = title, code
+
+
+class StartupTimeout(RuntimeError):
+    """A component did not become ready in time; the message says what was missing."""
+
+
+class StopRequested(Exception):
+    """The supervisor was asked to stop (signal) before the stack was ready."""
+
+
+# --------------------------------------------------------------------------- output
+
+
+class PrefixedOutput:
+    """Writes ``[name] line`` to one stream, flushed per line; ANSI colour only on a TTY."""
+
+    def __init__(self, stream: TextIO, colour: bool | None = None) -> None:
+        self._stream: TextIO | None = stream
+        self._colour = stream.isatty() if colour is None else colour
+        self._width = max(len(name) for name in _COLOURS) + 2
+
+    def write(self, name: str, text: str) -> None:
+        """Write one line. Once the stream is gone (``| head`` exited) lines are dropped, so
+        the children's pipes keep draining and nothing blocks."""
+        if self._stream is None:
+            return
+        prefix = f"[{name}]".ljust(self._width)
+        if self._colour:
+            prefix = f"\x1b[{_COLOURS.get(name, '0')}m{prefix}\x1b[0m"
+        try:
+            self._stream.write(f"{prefix} {text}\n")
+            self._stream.flush()
+        except (OSError, ValueError):  # BrokenPipeError; ValueError: the stream was closed
+            self._stream = None
+
+
+class PrefixedLogHandler(logging.Handler):
+    """Sends log records (the supervisor's own) to a :class:`PrefixedOutput` as ``[up]``."""
+
+    def __init__(self, output: PrefixedOutput, name: str = "up") -> None:
+        super().__init__()
+        self._output, self._label = output, name
+
+    def emit(self, record: logging.LogRecord) -> None:
+        try:
+            self._output.write(self._label, self.format(record))
+        except Exception:  # logging must never raise into the caller
+            self.handleError(record)
+
+
+# --------------------------------------------------------------------------- one child
+
+
+def _parent_death_signal() -> Callable[[], None] | None:
+    """A ``preexec_fn`` asking Linux to SIGTERM the child when its parent dies, or None where
+    ``prctl`` is unavailable. libc is resolved here, before fork, so the child only calls it."""
+    if not sys.platform.startswith("linux"):
+        return None
+    try:
+        prctl = ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6", use_errno=True).prctl
+    except (OSError, AttributeError):
+        return None
+    pr_set_pdeathsig = 1
+    parent_pid = os.getpid()
+
+    def preexec() -> None:
+        prctl(pr_set_pdeathsig, int(signal.SIGTERM), 0, 0, 0)
+        if os.getppid() != parent_pid:  # the parent died before prctl took effect
+            os.kill(os.getpid(), signal.SIGTERM)
+
+    return preexec
+
+
+@dataclass
+class Child:
+    """A running component: its process, its log pump and (bridge) the announced port."""
+
+    component: Component
+    process: asyncio.subprocess.Process
+    output: PrefixedOutput
+    port: asyncio.Future[int] = field(default_factory=lambda: asyncio.get_running_loop()
+                                      .create_future())
+    _pump: asyncio.Task[None] | None = None
+
+    @classmethod
+    async def start(cls, component: Component, bridge_url: str, env: Mapping[str, str],
+                    output: PrefixedOutput) -> Child:
+        process = await asyncio.create_subprocess_exec(
+            *component.argv(bridge_url), stdin=asyncio.subprocess.DEVNULL,
+            stdout=asyncio.subprocess.PIPE, stderr=asyncio.subprocess.STDOUT, env=dict(env),
+            process_group=0, preexec_fn=_parent_death_signal(), limit=_LINE_LIMIT)
+        child = cls(component, process, output)
+        child._pump = asyncio.create_task(child._pump_lines(), name=f"{component.name} log")
+        log.info("started %s (pid %d)", component.title, process.pid)
+        return child
+
+    @property
+    def pid(self) -> int:
+        return self.process.pid
+
+    async def _pump_lines(self) -> None:
+        stream = self.process.stdout
+        assert stream is not None
+        while True:
+            try:
+                line = await stream.readline()
+            except ValueError:  # asyncio discards a line over _LINE_LIMIT; say so
+                line = b"[a log line longer than %d bytes was dropped]" % _LINE_LIMIT
+            if not line:
+                break
+            if not self.port.done() and (match := _LISTENING.search(line)):
+                self.port.set_result(int(match.group("port")))
+            self.output.write(self.component.name, line.decode("utf-8", "replace").rstrip())
+
+    async def wait(self) -> int:
+        """Wait for the exit and for the last log line to be written; the exit code."""
+        code = await self.process.wait()
+        if self._pump is not None:
+            await asyncio.shield(self._pump)  # a cancelled waiter must not stop the pump
+        return code
+
+    def signal_group(self, sig: signal.Signals) -> None:
+        """Send ``sig`` to the child's process group (the child and anything it started)."""
+        if self.process.returncode is None:
+            with contextlib.suppress(ProcessLookupError):
+                os.killpg(self.pid, sig)
+
+    async def stop(self, timeout_s: float) -> int:
+        """SIGINT, then SIGTERM, then SIGKILL, ``timeout_s`` apart; the exit code."""
+        for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGKILL):
+            self.signal_group(sig)
+            try:
+                return await asyncio.wait_for(asyncio.shield(self.wait()), timeout_s)
+            except TimeoutError:
+                log.warning("%s did not exit within %.0f s of %s", self.component.title,
+                            timeout_s, sig.name)
+        return await self.wait()
+
+
+# --------------------------------------------------------------------------- the stack
+
+
+class Supervisor:
+    """Starts ``components`` (the first is the bridge), watches them, stops them all.
+
+    on_ready : called once with the bridge URL when every component is ready.
+    """
+
+    def __init__(self, components: Sequence[Component], config: LaunchConfig,
+                 output: PrefixedOutput, env: Mapping[str, str] | None = None,
+                 on_ready: Callable[[str], None] | None = None) -> None:
+        self._bridge, *self._clients = components
+        self._config = config
+        self._output = output
+        self._env = child_environment(env)
+        self._on_ready = on_ready
+        self.children: list[Child] = []
+        self.url = ""
+        self._missing: dict[str, tuple[str, ...]] = {}
+
+    async def run(self, stop: asyncio.Event) -> int:
+        """Run until ``stop`` is set (0) or a component dies or fails to start (1)."""
+        status = 1
+        try:
+            await self._start(stop)
+            if self._on_ready is not None:
+                self._on_ready(self.url)
+            await self._guard(stop.wait(), stop, timeout_s=None)
+            status = 0
+        except StopRequested:
+            status = 0
+        except (ComponentDied, StartupTimeout) as exc:
+            log.error("%s; stopping the others", exc)
+        except RosbridgeError as exc:  # the readiness probe lost the bridge
+            log.error("cannot check readiness through %s: %s", self.url, exc)
+        finally:
+            codes = await self._stop_all()
+        unclean = {title: code for title, code in codes.items() if code != 0}
+        if status == 0 and unclean:
+            log.error("unclean shutdown: %s",
+                      ", ".join(describe_exit(t, c) for t, c in unclean.items()))
+            status = 1
+        return status
+
+    async def _start(self, stop: asyncio.Event) -> None:
+        deadline = asyncio.get_running_loop().time() + self._config.startup_timeout_s
+        bridge = await self._spawn(self._bridge)
+        port = await self._guard(asyncio.shield(bridge.port), stop, deadline,
+                                 waiting_for=self._bridge.title)
+        self.url = ws_url(connect_host(self._config.host), port)
+        await self._guard(self._probe_version(), stop, deadline, waiting_for=self._bridge.title)
+        log.info("%s ready at %s", self._bridge.title, self.url)
+        for component in self._clients:
+            await self._spawn(component)
+        await self._guard(self._probe_clients(), stop, deadline,
+                          waiting_for=", ".join(c.title for c in self._clients))
+
+    async def _spawn(self, component: Component) -> Child:
+        child = await Child.start(component, self.url, self._env, self._output)
+        self.children.append(child)
+        return child
+
+    async def _probe_version(self) -> None:
+        while True:
+            with contextlib.suppress(Unhealthy):
+                await asyncio.to_thread(fetch_version, self.url, 5.0)
+                return
+            await asyncio.sleep(_POLL_S)
+
+    async def _probe_clients(self) -> None:
+        """Poll ``/rosapi/publishers`` until every client component's topics have one."""
+        pending = {c.title: c.topics for c in self._clients}
+        self._missing = dict(pending)
+        async with RosbridgeClient(self.url, encoding="json", name="up-probe",
+                                   reconnect=False) as probe:
+            while pending:
+                for title, topics in list(pending.items()):
+                    with contextlib.suppress(RosbridgeError, TimeoutError):
+                        self._missing[title] = tuple(await missing_publishers(probe, topics))
+                        if not self._missing[title]:
+                            log.info("%s ready: publishing %s", title, ", ".join(topics))
+                            del pending[title]
+                if pending:
+                    await asyncio.sleep(_POLL_S)
+
+    async def _guard(self, work: Awaitable[T], stop: asyncio.Event, deadline: float | None = None,
+                     *, timeout_s: float | None = None, waiting_for: str = "") -> T:
+        """Await ``work`` unless a child exits (ComponentDied), ``stop`` is set
+        (StopRequested) or ``deadline`` passes (StartupTimeout) first."""
+        loop = asyncio.get_running_loop()
+        if deadline is not None:
+            timeout_s = max(0.0, deadline - loop.time())
+        task = asyncio.ensure_future(work)
+        stopping = asyncio.ensure_future(stop.wait())
+        exits = {asyncio.ensure_future(child.wait()): child for child in self.children}
+        try:
+            done, _ = await asyncio.wait({task, stopping, *exits}, timeout=timeout_s,
+                                         return_when=asyncio.FIRST_COMPLETED)
+            for exited, child in exits.items():
+                if exited in done:
+                    raise ComponentDied(child.component.title, exited.result())
+            if task in done:
+                return task.result()
+            if stopping in done:
+                raise StopRequested
+            raise StartupTimeout(self._timeout_message(waiting_for))
+        finally:
+            for pending in (task, stopping, *exits):
+                pending.cancel()
+            await asyncio.gather(task, stopping, *exits, return_exceptions=True)
+
+    def _timeout_message(self, waiting_for: str) -> str:
+        details = "; ".join(f"{title} has no publisher on {', '.join(topics)}"
+                            for title, topics in self._missing.items() if topics)
+        return (f"{waiting_for} not ready within {self._config.startup_timeout_s:.0f} s"
+                + (f" ({details})" if details else ""))
+
+    async def _stop_all(self) -> dict[str, int]:
+        """Stop the clients (together), then the bridge; exit code by component title."""
+        timeout_s = self._config.stop_timeout_s
+        clients = [child for child in self.children if child.component is not self._bridge]
+        bridge = [child for child in self.children if child.component is self._bridge]
+        codes: dict[str, int] = {}
+        for group in (clients, bridge):
+            results = await asyncio.gather(*(child.stop(timeout_s) for child in group))
+            for child, code in zip(group, results, strict=True):
+                log.info("%s", describe_exit(child.component.title, code))
+                codes[child.component.title] = code
+        return codes

@@ -1,0 +1,121 @@
+"""``riverbridge up`` / ``python -m clients.up_cli``: bridge, simulator and navigation as three
+local processes, with merged, prefixed logs, until Ctrl-C/SIGTERM or until one of them dies.
+
+Exit codes: 0 after a clean stop on SIGINT/SIGTERM; 1 when a component died, did not become
+ready within ``--startup-timeout``, or did not stop cleanly; 2 for bad options.
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import logging
+import signal
+import sys
+from pathlib import Path
+
+from clients.launcher import (
+    LaunchConfig,
+    PrefixedLogHandler,
+    PrefixedOutput,
+    Supervisor,
+    stack_components,
+)
+
+log = logging.getLogger("clients.launcher")
+
+# Ctrl-C, `kill`/docker stop, and a closed terminal all mean "stop the three cleanly".
+STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
+
+
+def _port(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a port number: {text!r}") from None
+    if not 0 <= value <= 65535:
+        raise argparse.ArgumentTypeError(f"must be 0..65535 (0 picks a free port), got {value}")
+    return value
+
+
+def _seconds(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number of seconds: {text!r}") from None
+    if not value > 0:
+        raise argparse.ArgumentTypeError(f"must be positive, got {text}")
+    return value
+
+
+def _toml_file(text: str) -> Path:
+    path = Path(text)
+    if not path.is_file():
+        raise argparse.ArgumentTypeError(f"no such file: {text}")
+    return path.resolve()
+
+
+def build_parser() -> argparse.ArgumentParser:
+    defaults = LaunchConfig()
+    parser = argparse.ArgumentParser(
+        prog="riverbridge up",
+        description="Run the bridge, the simulator and the navigation service as three local "
+        "processes with merged, prefixed logs, until Ctrl-C/SIGTERM or until one of them dies.")
+    parser.add_argument("--host", default=defaults.host,
+                        help="address the bridge listens on (default %(default)s)")
+    parser.add_argument("--port", type=_port, default=defaults.port,
+                        help="the bridge's TCP port; 0 picks a free one (default %(default)s)")
+    parser.add_argument("--encoding", choices=("json", "cbor"), default=defaults.encoding,
+                        help="wire encoding of the simulator and navigation (default %(default)s)")
+    parser.add_argument("--sim-config", type=_toml_file, metavar="FILE",
+                        help="simulator TOML configuration")
+    parser.add_argument("--nav-config", type=_toml_file, metavar="FILE",
+                        help="navigation TOML configuration")
+    parser.add_argument("--startup-timeout", type=_seconds, default=defaults.startup_timeout_s,
+                        metavar="S", help="seconds for all three to become ready "
+                        "(default %(default)s)")
+    parser.add_argument("--stop-timeout", type=_seconds, default=defaults.stop_timeout_s,
+                        metavar="S", help="seconds per shutdown step (SIGINT, SIGTERM, SIGKILL; "
+                        "default %(default)s)")
+    return parser
+
+
+def config_from_args(args: argparse.Namespace) -> LaunchConfig:
+    return LaunchConfig(host=args.host, port=args.port, encoding=args.encoding,
+                        sim_config=args.sim_config, nav_config=args.nav_config,
+                        startup_timeout_s=args.startup_timeout, stop_timeout_s=args.stop_timeout)
+
+
+async def _supervise(config: LaunchConfig, output: PrefixedOutput) -> int:
+    stop = asyncio.Event()
+    loop = asyncio.get_running_loop()
+    for sig in STOP_SIGNALS:
+        loop.add_signal_handler(sig, stop.set)
+
+    def announce(url: str) -> None:
+        output.write("up", f"all three ready; connect to {url} (Ctrl-C stops)")
+
+    try:
+        supervisor = Supervisor(stack_components(config), config, output, on_ready=announce)
+        return await supervisor.run(stop)
+    finally:
+        for sig in STOP_SIGNALS:
+            loop.remove_signal_handler(sig)
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    config = config_from_args(args)
+    output = PrefixedOutput(sys.stdout)
+    handler = PrefixedLogHandler(output)
+    log.addHandler(handler)
+    log.setLevel(logging.INFO)
+    log.propagate = False
+    try:
+        return asyncio.run(_supervise(config, output))
+    finally:
+        log.removeHandler(handler)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

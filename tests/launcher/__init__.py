@@ -1,0 +1,1 @@
+"""Tests of `riverbridge up`, the health check and the docker compose files."""

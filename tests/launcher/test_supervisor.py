@@ -1,0 +1,129 @@
+"""The supervisor with real components: the bridge and the navigation service as processes.
+
+These run without the simulator (the navigation service publishes its obstacle map and
+diagnostics on timers), so the supervision paths are exercised even where the simulator's
+command line is not available.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import io
+import logging
+import os
+import signal
+import socket
+from collections.abc import Iterator
+from dataclasses import replace
+
+import pytest
+
+from clients import RosbridgeClient
+from clients.launcher import (
+    Component,
+    LaunchConfig,
+    PrefixedLogHandler,
+    PrefixedOutput,
+    Supervisor,
+    stack_components,
+)
+
+from .processes import kill_leftovers, repo_env, wait_gone
+
+pytestmark = pytest.mark.slow
+
+CONFIG = LaunchConfig(port=0, startup_timeout_s=150.0, stop_timeout_s=20.0)
+
+
+@pytest.fixture
+def output() -> Iterator[io.StringIO]:
+    """Everything the supervisor and its children wrote, prefixed."""
+    stream = io.StringIO()
+    handler = PrefixedLogHandler(PrefixedOutput(stream))
+    logger = logging.getLogger("clients.launcher")
+    logger.addHandler(handler)
+    logger.setLevel(logging.INFO)
+    yield stream
+    logger.removeHandler(handler)
+
+
+def bridge_and_navigation(config: LaunchConfig = CONFIG) -> list[Component]:
+    bridge, _, nav = stack_components(config)
+    return [bridge, nav]
+
+
+class Harness:
+    """A supervisor running as a task, with its ready URL and a stop switch."""
+
+    def __init__(self, components: list[Component], config: LaunchConfig,
+                 stream: io.StringIO) -> None:
+        self.stop = asyncio.Event()
+        self.ready: asyncio.Future[str] = asyncio.get_running_loop().create_future()
+        self.supervisor = Supervisor(components, config, PrefixedOutput(stream),
+                                     env=repo_env(), on_ready=self.ready.set_result)
+        self.task = asyncio.create_task(self.supervisor.run(self.stop))
+
+    def pids(self) -> list[int]:
+        return [child.pid for child in self.supervisor.children]
+
+    async def finish(self, timeout_s: float = 120.0) -> int:
+        try:
+            return await asyncio.wait_for(self.task, timeout_s)
+        finally:
+            kill_leftovers(self.pids())
+
+
+async def first_message(url: str, topic: str, type_name: str) -> dict:
+    async with RosbridgeClient(url, encoding="cbor") as client:
+        sub = await client.subscribe(topic, type_name)
+        async with asyncio.timeout(60.0):
+            async for received in sub:
+                return received.msg
+    raise AssertionError(f"{topic} ended without a message")
+
+
+async def test_runs_until_stopped_then_exits_0_leaving_no_process(output: io.StringIO) -> None:
+    harness = Harness(bridge_and_navigation(), CONFIG, output)
+    url = await asyncio.wait_for(asyncio.shield(harness.ready), 180.0)
+    grid = await first_message(url, "/nav/obstacle_map", "nav_msgs/msg/OccupancyGrid")
+    assert grid["info"]["width"] > 0
+    harness.stop.set()
+    assert await harness.finish() == 0, output.getvalue()
+    assert wait_gone(harness.pids()) == []
+    text = output.getvalue()
+    assert "[bridge] " in text and "[nav]    " in text and "navigation ready" in text
+
+
+async def test_a_dying_component_stops_the_rest_and_is_named(output: io.StringIO) -> None:
+    harness = Harness(bridge_and_navigation(), CONFIG, output)
+    await asyncio.wait_for(asyncio.shield(harness.ready), 180.0)
+    nav_pid = harness.supervisor.children[1].pid
+    os.kill(nav_pid, signal.SIGKILL)
+    assert await harness.finish() == 1
+    assert "navigation was killed by SIGKILL (exit code -9)" in output.getvalue()
+    assert wait_gone(harness.pids()) == []
+
+
+async def test_a_component_that_never_gets_ready_times_out_naming_the_topic(
+        output: io.StringIO) -> None:
+    config = CONFIG.model_copy(update={"startup_timeout_s": 20.0})
+    bridge, nav = bridge_and_navigation(config)
+    never = replace(nav, topics=(*nav.topics, "/never/published"))
+    harness = Harness([bridge, never], config, output)
+    assert await harness.finish() == 1
+    text = output.getvalue()
+    assert "navigation not ready within 20 s" in text
+    assert "no publisher on /never/published" in text
+    assert not harness.ready.done()
+    assert wait_gone(harness.pids()) == []
+
+
+async def test_a_bridge_that_cannot_listen_is_reported(output: io.StringIO) -> None:
+    with socket.socket() as taken:
+        taken.bind(("127.0.0.1", 0))
+        taken.listen()
+        config = CONFIG.model_copy(update={"port": taken.getsockname()[1]})
+        harness = Harness(bridge_and_navigation(config), config, output)
+        assert await harness.finish() == 1
+    assert "bridge exited with code" in output.getvalue()
+    assert len(harness.pids()) == 1  # navigation was never started

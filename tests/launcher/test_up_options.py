@@ -1,0 +1,63 @@
+"""`riverbridge up`'s command line: bad options fail fast, naming the option."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+import pytest
+
+from clients import up_cli
+from clients.launcher import LaunchConfig
+
+from .processes import REPO_ROOT, repo_env
+
+
+@pytest.mark.parametrize(
+    ("argv", "option"),
+    [
+        (["--port", "70000"], "--port"),
+        (["--port", "nine"], "--port"),
+        (["--sim-config", "/nonexistent/sim.toml"], "--sim-config"),
+        (["--nav-config", "/nonexistent/nav.toml"], "--nav-config"),
+        (["--encoding", "xml"], "--encoding"),
+        (["--startup-timeout", "0"], "--startup-timeout"),
+        (["--startup-timeout", "soon"], "--startup-timeout"),
+        (["--stop-timeout", "-1"], "--stop-timeout"),
+        (["--frobnicate"], "--frobnicate"),
+    ],
+)
+def test_bad_option_exits_2_naming_it(argv: list[str], option: str,
+                                      capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(SystemExit) as exited:
+        up_cli.main(argv)
+    assert exited.value.code == 2
+    assert option in capsys.readouterr().err
+
+
+def test_missing_config_file_through_the_real_command_line() -> None:
+    """Started as users start it; nothing is launched, the message names option and file."""
+    result = subprocess.run(
+        [sys.executable, "-m", "clients.up_cli", "--nav-config", "missing-nav.toml"],
+        cwd=REPO_ROOT, env=repo_env(), capture_output=True, text=True, timeout=120)
+    assert result.returncode == 2
+    assert "--nav-config" in result.stderr and "missing-nav.toml" in result.stderr
+    assert "started" not in result.stdout
+
+
+def test_options_become_the_launch_config(tmp_path) -> None:
+    sim_toml, nav_toml = tmp_path / "sim.toml", tmp_path / "nav.toml"
+    sim_toml.write_text("")
+    nav_toml.write_text("")
+    args = up_cli.build_parser().parse_args(
+        ["--host", "0.0.0.0", "--port", "0", "--encoding", "json", "--sim-config", str(sim_toml),
+         "--nav-config", str(nav_toml), "--startup-timeout", "30", "--stop-timeout", "2.5"])
+    assert up_cli.config_from_args(args) == LaunchConfig(
+        host="0.0.0.0", port=0, encoding="json", sim_config=sim_toml.resolve(),
+        nav_config=nav_toml.resolve(), startup_timeout_s=30.0, stop_timeout_s=2.5)
+
+
+def test_defaults_are_rosbridges_port_on_loopback_with_cbor() -> None:
+    config = up_cli.config_from_args(up_cli.build_parser().parse_args([]))
+    assert (config.host, config.port, config.encoding) == ("127.0.0.1", 9090, "cbor")
+    assert config.sim_config is None and config.nav_config is None
