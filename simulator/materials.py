@@ -30,7 +30,9 @@ class Material:
 GRASS = Material("grass", 0.5, 0.45, (86, 125, 60))
 SHORE = Material("shore", 0.8, 0.35, (140, 125, 95))
 RIVERBED = Material("riverbed", 0.2, 0.2, (90, 80, 60))
-WATER = Material("water", 0.05, 0.0, (52, 92, 120))
+# The thesis's water is "a two-dimensional collision mesh" (3.5.3) that Unity's LIDAR raycasts
+# hit, so water returns exist (weak), and navigation must remove them as the thesis did.
+WATER = Material("water", 0.05, 0.05, (52, 92, 120))
 STEEL = Material("steel", 60.0, 0.6, (120, 120, 128))
 VESSEL = Material("vessel", 100.0, 0.7, (200, 200, 205))
 WOOD = Material("wood", 2.0, 0.4, (110, 80, 50))

@@ -8,30 +8,12 @@ from typing import Any
 
 import numpy as np
 import pytest
-import trimesh
 
 from schemas.codec_cdr import from_cdr, to_cdr
 from schemas.message import normalize
 from schemas.registry import TypeRegistry
 from simulator.config import SceneConfig
-from simulator.materials import Material
-from simulator.props import MeshPart
 from simulator.scene import Scene, build_scene
-
-WALL = Material("wall", radar_reflectance=7.0, lidar_reflectivity=0.8, colour_rgb=(200, 40, 30))
-
-
-def box_part(lower, upper, material: Material = WALL) -> MeshPart:
-    """An axis-aligned box from corner `lower` to corner `upper` (map frame, metres)."""
-    lower, upper = np.asarray(lower, float), np.asarray(upper, float)
-    box = trimesh.creation.box(extents=upper - lower)
-    box.apply_translation((lower + upper) / 2)
-    return MeshPart(np.asarray(box.vertices), np.asarray(box.faces), material)
-
-
-def box_scene(lower, upper, material: Material = WALL) -> Scene:
-    """A scene holding one box and nothing else (no terrain, no water surface)."""
-    return Scene([box_part(lower, upper, material)], water_level_m=0.0)
 
 
 @pytest.fixture(scope="session")

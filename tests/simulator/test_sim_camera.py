@@ -5,7 +5,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 import pytest
-from conftest import WALL, box_scene
+from sim_scenes import WALL, box_scene
 
 from simulator.camera import Camera, pixel_directions
 from simulator.config import CameraConfig, MountConfig

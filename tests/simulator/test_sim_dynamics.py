@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import box_scene
+from sim_scenes import box_scene
 
 from simulator.config import VesselConfig
 from simulator.dynamics import Command, Pose2D, VesselDynamics, VesselState

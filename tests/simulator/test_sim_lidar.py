@@ -4,12 +4,12 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import WALL, box_scene
+from sim_scenes import WALL, box_scene
 
 from simulator.config import LidarConfig, MountConfig
 from simulator.frames import Pose2D
 from simulator.lidar import Lidar, lidar_directions
-from simulator.materials import WATER
+from simulator.materials import WATER, Material
 
 WALL_DISTANCE_M = 20.0
 
@@ -56,8 +56,22 @@ def test_range_limit_and_no_return_surfaces():
     try:
         wall = box_scene((WALL_DISTANCE_M, -200.0, -50.0), (22.0, 200.0, 50.0))
         assert len(near.scan(wall, Pose2D(0, 0, 0))) == 0  # beyond range
+        mirror = Material("mirror", 0.0, 0.0, (0, 0, 0))
+        flat = box_scene((-500.0, -500.0, -1.0), (500.0, 500.0, 0.0), mirror)
+        assert len(near.scan(flat, Pose2D(0, 0, 0))) == 0  # reflectivity 0: no returns
+    finally:
+        near.close()
+
+
+def test_water_gives_weak_returns_on_the_water_plane():
+    """Unity's LIDAR hit the thesis's water collision mesh; navigation removes those points."""
+    near = Lidar(LidarConfig(range_max_m=15.0), threads=1)
+    try:
         water = box_scene((-500.0, -500.0, -1.0), (500.0, 500.0, 0.0), WATER)
-        assert len(near.scan(water, Pose2D(0, 0, 0))) == 0  # water reflects away: no returns
+        points = near.scan(water, Pose2D(0, 0, 0))
+        assert len(points) > 0
+        np.testing.assert_allclose(points[:, 3], WATER.lidar_reflectivity)
+        assert np.all(points[:, 2] < 0.0)  # below the sensor, on the plane
     finally:
         near.close()
 

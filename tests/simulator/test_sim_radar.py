@@ -4,12 +4,13 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import WALL, Scene, box_part
+from sim_scenes import WALL, box_part
 
 from simulator.config import MountConfig, RadarConfig
 from simulator.frames import Pose2D
 from simulator.props import MeshPart
 from simulator.radar import Radar, RadarGeometry
+from simulator.scene import Scene
 
 CFG = RadarConfig(mount=MountConfig(z_m=3.0))
 

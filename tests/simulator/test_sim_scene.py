@@ -99,7 +99,8 @@ def test_thesis_scene_contents(small_scene):
     assert np.count_nonzero(scene.radar_reflectance == materials.VESSEL.radar_reflectance) == 48
     # Five landing stages: a steel pontoon (12 triangles) each.
     assert np.count_nonzero(scene.radar_reflectance == materials.STEEL.radar_reflectance) == 60
-    assert np.count_nonzero(scene.lidar_reflectivity == 0.0) == 2  # one water quad
+    # One water quad, with the water's weak LIDAR return.
+    assert np.count_nonzero(scene.lidar_reflectivity == materials.WATER.lidar_reflectivity) == 2
 
 
 def test_start_pose_is_afloat_in_the_river(small_scene):
