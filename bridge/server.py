@@ -15,24 +15,21 @@ import time
 from collections.abc import AsyncIterator, Hashable
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
-from importlib.metadata import PackageNotFoundError, version
 
 from websockets.asyncio.server import Server, ServerConnection, serve
 from websockets.exceptions import ConnectionClosed
-from websockets.http11 import Request, Response
 
 from bridge.config import BridgeConfig
 from bridge.core import BridgeCore
 from bridge.effects import Close, Effect, Schedule, Send
+from bridge.http import HttpRoutes
 from bridge.outgoing import WireFrame, render
 from bridge.sendqueue import SendQueue
-from schemas import codec_json
 from schemas.errors import SchemaError
 from schemas.registry import TypeRegistry
 
 logger = logging.getLogger("bridge.server")
 
-PROTOCOL_VERSION = {"major": 2, "minor": 0, "patch": 0}
 # Bytes the transport may buffer per client before `send` waits: a few small frames, or one
 # slice of a scan, without letting a stalled reader pin many megabytes.
 WRITE_HIGH_WATER = 1024 * 1024
@@ -43,13 +40,6 @@ CLOSE_TIMEOUT_S = 3.0
 # the bridge stops reading its requests: a client that calls without reading then waits on
 # TCP instead of growing the bridge's memory.
 ANSWER_BACKLOG = 256
-
-
-def server_version() -> str:
-    try:
-        return f"riverbridge {version('riverbridge')}"
-    except PackageNotFoundError:
-        return "riverbridge"
 
 
 class ClientLink:
@@ -83,6 +73,7 @@ class BridgeServer:
         self._pool = ThreadPoolExecutor(ENCODE_WORKERS, thread_name_prefix="bridge-encode")
         self._server: Server | None = None
         self._closing: set[asyncio.Task[None]] = set()
+        self.http = HttpRoutes()  # plain HTTP on the websocket port; others add routes
 
     @property
     def port(self) -> int:
@@ -94,7 +85,7 @@ class BridgeServer:
             self._handle, self.config.host, self.config.port,
             compression=None, max_size=self.config.max_message_size,
             write_limit=WRITE_HIGH_WATER, close_timeout=CLOSE_TIMEOUT_S,
-            process_request=self._process_request,
+            process_request=self.http,
         )
 
     async def stop(self) -> None:
@@ -114,22 +105,6 @@ class BridgeServer:
             timer.cancel()
         self._timers.clear()
         self._pool.shutdown(wait=False, cancel_futures=True)
-
-    # -- HTTP on the same port ---------------------------------------------------------------
-
-    def _process_request(self, connection: ServerConnection, request: Request) -> Response | None:
-        if request.path == "/version":
-            body = {"protocol": PROTOCOL_VERSION, "server": server_version()}
-            response = connection.respond(200, codec_json.dumps(body).decode("ascii"))
-            del response.headers["Content-Type"]
-            response.headers["Content-Type"] = "application/json"
-            return response
-        if "upgrade" not in request.headers.get("Connection", "").lower():
-            if request.path == "/":
-                return connection.respond(
-                    200, "riverbridge: a rosbridge v2 server; connect with a websocket.\n")
-            return connection.respond(404, "Not Found\n")
-        return None
 
     # -- one connection ----------------------------------------------------------------------
 
