@@ -8,11 +8,6 @@ from bridge_harness import CoreHarness
 from schemas.registry import TypeRegistry
 
 
-@pytest.fixture(scope="session")
-def registry() -> TypeRegistry:
-    return TypeRegistry.with_defaults()
-
-
 @pytest.fixture
 def harness(registry: TypeRegistry) -> CoreHarness:
     return CoreHarness(registry)

@@ -13,11 +13,6 @@ from clients import RosbridgeClient
 from schemas.registry import TypeRegistry
 
 
-@pytest.fixture(scope="session")
-def registry() -> TypeRegistry:
-    return TypeRegistry.with_defaults()
-
-
 @pytest.fixture
 async def bridge() -> AsyncIterator[Any]:
     """A running bridge; ``.url`` is its ws:// address."""

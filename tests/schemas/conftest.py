@@ -5,16 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from schemas.registry import TypeRegistry
-
 #: LIDAR scan size of the thesis set-up: 1440 azimuths x 240 elevations, x,y,z,intensity f32.
 LIDAR_POINTS = 345_600
 POINT_STEP_BYTES = 16
-
-
-@pytest.fixture(scope="session")
-def registry() -> TypeRegistry:
-    return TypeRegistry.with_defaults()
 
 
 def make_pointcloud(num_points: int = LIDAR_POINTS, seed: int = 0) -> dict:

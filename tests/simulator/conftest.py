@@ -1,17 +1,9 @@
-"""Fixtures for the simulator tests: known-geometry scenes and a canonical-form checker."""
+"""Fixtures for the simulator tests: the procedural scene at test resolution."""
 
 from __future__ import annotations
 
-import math
-from collections.abc import Callable
-from typing import Any
-
-import numpy as np
 import pytest
 
-from schemas.codec_cdr import from_cdr, to_cdr
-from schemas.message import normalize
-from schemas.registry import TypeRegistry
 from simulator.config import SceneConfig
 from simulator.scene import Scene, build_scene
 
@@ -20,45 +12,3 @@ from simulator.scene import Scene, build_scene
 def small_scene() -> Scene:
     """The procedural thesis scene at a coarse terrain resolution (fast to build)."""
     return build_scene(SceneConfig(terrain_cells=120, trees=20, houses=5), seed=3)
-
-
-def assert_same(expected: Any, actual: Any, path: str = "msg") -> None:
-    """Deep equality that also demands equal Python types and ndarray dtypes."""
-    if isinstance(expected, np.ndarray):
-        assert isinstance(actual, np.ndarray), f"{path}: {type(actual).__name__} not ndarray"
-        assert actual.dtype == expected.dtype, f"{path}: dtype {actual.dtype} != {expected.dtype}"
-        np.testing.assert_array_equal(actual, expected, err_msg=path)
-        return
-    assert type(actual) is type(expected), (
-        f"{path}: {type(actual).__name__} != {type(expected).__name__}"
-    )
-    if isinstance(expected, dict):
-        assert actual.keys() == expected.keys(), f"{path}: keys differ"
-        for key in expected:
-            assert_same(expected[key], actual[key], f"{path}.{key}")
-    elif isinstance(expected, list):
-        assert len(actual) == len(expected), f"{path}: length differs"
-        for i, (e, a) in enumerate(zip(expected, actual, strict=True)):
-            assert_same(e, a, f"{path}[{i}]")
-    elif isinstance(expected, float) and math.isnan(expected):
-        assert math.isnan(actual), path
-    else:
-        assert actual == expected, f"{path}: {actual!r} != {expected!r}"
-
-
-@pytest.fixture(scope="session")
-def registry() -> TypeRegistry:
-    return TypeRegistry.with_defaults()
-
-
-@pytest.fixture(scope="session")
-def check_canonical(registry: TypeRegistry) -> Callable[[str, dict], None]:
-    """Assert a message dict is already canonical (normalising it changes nothing, no field is
-    missing or extra) and survives a CDR round trip unchanged."""
-
-    def check(type_name: str, msg: dict) -> None:
-        spec = registry.message(type_name)
-        assert_same(msg, normalize(spec, msg, now_ns=0))
-        assert_same(msg, from_cdr(registry, type_name, to_cdr(registry, type_name, msg)))
-
-    return check

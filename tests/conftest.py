@@ -1,4 +1,4 @@
-"""Fixtures for the navigation tests: the type registry and a canonical-form checker."""
+"""Fixtures every test folder shares: the type registry and the canonical-message checker."""
 
 from __future__ import annotations
 
@@ -45,8 +45,8 @@ def registry() -> TypeRegistry:
 
 @pytest.fixture(scope="session")
 def check_canonical(registry: TypeRegistry) -> Callable[[str, dict], None]:
-    """Assert a message dict is already canonical (normalising changes nothing) and survives
-    a CDR round trip unchanged."""
+    """Assert a message dict is already canonical (normalising it changes nothing, no field is
+    missing or extra) and survives a CDR round trip unchanged."""
 
     def check(type_name: str, msg: dict) -> None:
         spec = registry.message(type_name)
