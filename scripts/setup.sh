@@ -6,12 +6,15 @@ cd "$(dirname "$0")/.."
 
 python3 -m pip install --quiet --disable-pip-version-check -e '.[test]'
 
-# Debian packages: Node.js for the roslibjs tests, docker-compose to validate docker-compose.yml
+# Debian packages: Node.js for the roslibjs tests and the dashboard build, Chromium for the
+# dashboard's browser tests, docker-compose to validate docker-compose.yml
 # (no Docker engine runs here; `docker-compose config` checks the file against the spec).
 missing=()
 command -v node >/dev/null 2>&1 || missing+=(nodejs)
 command -v npm >/dev/null 2>&1 || missing+=(npm)
 command -v docker-compose >/dev/null 2>&1 || missing+=(docker-compose)
+# Debian's Chromium for the dashboard's browser tests (playwright-core drives it; no downloads)
+[ -x /usr/bin/chromium ] || missing+=(chromium)
 if [ ${#missing[@]} -gt 0 ]; then
     echo "setup: installing ${missing[*]} from Debian's packages" >&2
     apt-get update -qq
@@ -20,3 +23,6 @@ fi
 if [ -f tests/compat/js/package-lock.json ]; then
     npm ci --prefix tests/compat/js --no-audit --no-fund --loglevel=error
 fi
+# The web dashboard the bridge serves (web/dist), and playwright-core for its browser tests.
+npm ci --prefix web --no-audit --no-fund --loglevel=error >/dev/null
+npm run build --prefix web --silent >/dev/null

@@ -1,0 +1,149 @@
+"""Is the web dashboard smooth on a full-rate stack, and does its memory stay flat?
+
+Opens the dashboard in headless Chromium (Debian's, driven by playwright-core from
+web/node_modules) against a running stack, records every requestAnimationFrame interval and
+performance.memory.usedJSHeapSize once a second, and prints frame-time median/p99/max, the
+share of frames over 50 ms, long tasks, messages received per topic, and the JS heap trend.
+The trend is a least-squares line through the heap's floor (the minimum per window, i.e. what
+survives garbage collection), in MiB per minute.
+
+Starts ``python -m clients.up_cli --port 0`` itself unless ``--url`` names a running bridge.
+Usage: python benchmarks/dashboard.py [--minutes N] [--url http://127.0.0.1:9090/]
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import json
+import os
+import re
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+import numpy as np
+
+REPO_ROOT = Path(__file__).resolve().parents[1]
+MEASURE_SCRIPT = REPO_ROOT / "web" / "scripts" / "measure_frames.mjs"
+FRAME_BUDGET_MS = 50.0  # issue 6: no frame over 50 ms on a full-rate stack
+STARTUP_TIMEOUT_S = 180.0
+MIB = 1024 * 1024
+_READY = re.compile(r"all three ready; connect to ws://(?P<address>[\d.]+:\d+)")
+
+
+@contextlib.contextmanager
+def started_stack() -> Iterator[str]:
+    """Run bridge, simulator and navigation; yield the dashboard's URL; stop them after."""
+    with tempfile.TemporaryDirectory(prefix="riverbridge-up-") as folder:
+        log_path = Path(folder) / "up.log"
+        with log_path.open("w") as log:
+            process = subprocess.Popen(
+                [sys.executable, "-m", "clients.up_cli", "--port", "0"], cwd=REPO_ROOT,
+                env=stack_env(), stdin=subprocess.DEVNULL, stdout=log, stderr=subprocess.STDOUT,
+                start_new_session=True)
+        try:
+            yield wait_ready(process, log_path)
+        finally:
+            stop(process)
+
+
+def stack_env() -> dict[str, str]:
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join(filter(None, [str(REPO_ROOT), env.get("PYTHONPATH")]))
+    return env
+
+
+def wait_ready(process: subprocess.Popen[bytes], log_path: Path) -> str:
+    deadline = time.monotonic() + STARTUP_TIMEOUT_S
+    while (match := _READY.search(log_path.read_text())) is None:
+        if process.poll() is not None or time.monotonic() > deadline:
+            raise RuntimeError(f"riverbridge up did not start:\n{log_path.read_text()}")
+        time.sleep(0.2)
+    return f"http://{match['address']}/"
+
+
+def stop(process: subprocess.Popen[bytes]) -> None:
+    process.send_signal(signal.SIGINT)
+    try:
+        process.wait(30)
+    except subprocess.TimeoutExpired:
+        os.killpg(process.pid, signal.SIGKILL)
+        process.wait()
+
+
+def measure(url: str, seconds: float) -> dict:
+    """Run the browser recorder for `seconds`; its JSON result."""
+    result = subprocess.run(["node", str(MEASURE_SCRIPT), url, str(seconds)],
+                            capture_output=True, text=True, timeout=seconds + 180)
+    lines = result.stdout.strip().splitlines()
+    if not lines:
+        raise RuntimeError(f"measure_frames.mjs printed nothing:\n{result.stderr}")
+    recorded = json.loads(lines[-1])
+    if not recorded["ok"]:
+        raise RuntimeError(recorded["reason"])
+    return recorded
+
+
+def heap_floor_trend(heap: np.ndarray, window_s: float) -> tuple[np.ndarray, float]:
+    """Per-window minima of `heap : (n, 2)` (t_s, bytes) and their slope in MiB/min."""
+    windows = np.floor(heap[:, 0] / window_s).astype(int)
+    floors = np.array([[heap[windows == w, 0].mean(), heap[windows == w, 1].min()]
+                       for w in np.unique(windows)])
+    if len(floors) < 2:
+        return floors, float("nan")
+    slope_bytes_per_s = np.polyfit(floors[:, 0], floors[:, 1], 1)[0]
+    return floors, slope_bytes_per_s * 60 / MIB
+
+
+def report(recorded: dict) -> str:
+    frames = np.asarray(recorded["frame_ms"], dtype=float)
+    heap = np.asarray(recorded["heap"], dtype=float)
+    seconds = recorded["seconds"]
+    floors, slope = heap_floor_trend(heap, window_s=max(10.0, seconds / 10))
+    p50, p99 = np.percentile(frames, [50, 99])
+    over = int((frames > FRAME_BUDGET_MS).sum())
+    long_tasks = np.asarray(recorded["long_tasks_ms"], dtype=float)
+    rates = {topic: count / seconds for topic, count in recorded["counts"].items()}
+    lines = [
+        f"{seconds:.0f} s, {len(frames)} frames ({len(frames) / seconds:.1f} fps)",
+        f"frame time ms: median {p50:.1f}  p99 {p99:.1f}  max {frames.max():.1f}  "
+        f"over {FRAME_BUDGET_MS:.0f} ms: {over} ({100 * over / len(frames):.2f} %)",
+        f"long tasks (>50 ms): {len(long_tasks)}"
+        + (f", max {long_tasks.max():.0f} ms" if len(long_tasks) else ""),
+        f"worst dashboard draw in one frame: {recorded['worst_draw_ms']:.1f} ms; per panel: "
+        + ", ".join(f"{k} {v:.1f}" for k, v in recorded["panel_worst_ms"].items()),
+        "worst message handling ms: "
+        + ", ".join(f"{k} {v:.1f}" for k, v in sorted(recorded["handler_worst_ms"].items())),
+        f"JS heap MiB: first floor {floors[0, 1] / MIB:.1f}  last floor "
+        f"{floors[-1, 1] / MIB:.1f}  max {heap[:, 1].max() / MIB:.1f}  "
+        f"trend {slope:+.2f} MiB/min over {len(floors)} windows",
+        "messages received (whole page life, /s over the run): "
+        + ", ".join(f"{t} {r:.1f}" for t, r in sorted(rates.items())),
+    ]
+    return "\n".join(lines)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--minutes", type=float, default=1.0,
+                        help="how long to record (default %(default)s; 10 for the soak)")
+    parser.add_argument("--url", help="dashboard of a running stack, e.g. http://127.0.0.1:9090/; "
+                                      "default: start `riverbridge up` on a free port")
+    args = parser.parse_args(argv)
+    seconds = args.minutes * 60
+    if args.url:
+        print(report(measure(args.url, seconds)))
+        return 0
+    with started_stack() as url:
+        print(f"stack at {url}")
+        print(report(measure(url, seconds)))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,42 @@
+// Canvas sizing for crisp drawing at any devicePixelRatio; drawing code works in CSS pixels.
+
+/**
+ * Match the backing store to the element's size. Returns {ctx, width, height, resized}, with
+ * `ctx` scaled so that one unit is one CSS pixel.
+ */
+export function fitCanvas(canvas) {
+  const ratio = window.devicePixelRatio || 1;
+  const width = Math.max(1, Math.floor(canvas.clientWidth));
+  const height = Math.max(1, Math.floor(canvas.clientHeight));
+  const resized = canvas.width !== Math.floor(width * ratio) ||
+    canvas.height !== Math.floor(height * ratio);
+  if (resized) {
+    canvas.width = Math.floor(width * ratio);
+    canvas.height = Math.floor(height * ratio);
+  }
+  const ctx = canvas.getContext("2d");
+  ctx.setTransform(ratio, 0, 0, ratio, 0, 0);
+  return { ctx, width, height, ratio, resized };
+}
+
+export const COLORS = {
+  background: "#0b1116",
+  grid: "#1f2a33",
+  text: "#9fb0bd",
+  axis: "#33424f",
+  accent: "#4fc3f7",
+  box: "#ffb74d",
+  radar: "#ff5252",
+  occupied: [239, 83, 80],
+  vessel: "#e0f7fa",
+  series: ["#ef5350", "#66bb6a", "#42a5f5"],
+};
+
+/** "No data yet" centred in a panel, so an empty panel explains itself. */
+export function drawWaiting(ctx, width, height, what) {
+  ctx.fillStyle = COLORS.text;
+  ctx.font = "13px system-ui, sans-serif";
+  ctx.textAlign = "center";
+  ctx.fillText(`waiting for ${what}…`, width / 2, height / 2);
+  ctx.textAlign = "left";
+}
