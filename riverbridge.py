@@ -15,7 +15,10 @@ SUBCOMMANDS: dict[str, tuple[str, str]] = {
     "bridge": ("bridge.cli", "run the rosbridge v2 websocket server"),
     "sim": ("simulator.cli", "run the simulator (scene, vessel, sensors) against a bridge"),
     "nav": ("navigation.cli", "run the navigation service against a bridge"),
+    "teleop": ("simulator.teleop_cli", "steer the simulated vessel from the keyboard"),
     "up": ("clients.up_cli", "run bridge, simulator and navigation as three local processes"),
+    "report": ("clients.report_cli", "measure latency and bytes per topic and stage, next to "
+               "the thesis's figures"),
 }
 
 

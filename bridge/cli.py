@@ -68,6 +68,9 @@ def build_parser() -> argparse.ArgumentParser:
                         choices=["debug", "info", "warning", "error", "critical"])
     parser.add_argument("--interfaces", action="append", default=[], type=Path, metavar="DIR",
                         help="extra folder of <pkg>/{msg,srv,action}/ definitions (repeatable)")
+    parser.add_argument("--web-root", type=Path, default=None, metavar="DIR",
+                        help="built web dashboard to serve at http://HOST:PORT/ (default: "
+                             "$RIVERBRIDGE_WEB_ROOT, else the repository's web/dist)")
     return parser
 
 
@@ -78,6 +81,7 @@ def config_from_args(args: argparse.Namespace) -> BridgeConfig:
         topics_glob=tuple(args.topics_glob), services_glob=tuple(args.services_glob),
         send_queue=args.send_queue, interface_dirs=tuple(args.interfaces),
         offload_threshold_bytes=args.offload_threshold,
+        web_root=args.web_root,
     )
 
 

@@ -42,3 +42,6 @@ class BridgeConfig(BaseModel):
     interface_dirs: tuple[Path, ...] = ()
     # ROS distribution reported by /rosapi/get_ros_version.
     distro: str = "jazzy"
+    # Built web dashboard served at http://host:port/; None = $RIVERBRIDGE_WEB_ROOT or the
+    # repository's web/dist (bridge.webapp.default_web_root).
+    web_root: Path | None = None

@@ -178,19 +178,24 @@ class BridgeCore:
         self.state.sinks.append(sink)
 
     def publish_external(self, node: str, topic: str, type_name: str, msg: dict[str, Any],
-                         now_ns: int, cdr: bytes | None = None) -> list[Effect]:
-        """Publish a message from a source outside the websocket clients (a DDS mirror).
+                         now_ns: int, cdr: bytes | None = None,
+                         latch: bool = False) -> list[Effect]:
+        """Publish a message from a source outside the websocket clients (a DDS mirror, the
+        bridge's own telemetry).
 
         `node` becomes a publisher of the topic; `msg` is validated and completed like a
-        client's message; `cdr`, if given, is reused for cbor-raw subscribers.
+        client's message; `cdr`, if given, is reused for cbor-raw subscribers; with `latch`
+        the message is kept for later subscribers.
         """
         ctx = Context(self.state, now_ns)
         name = absolute_name(topic)
         spec = self.state.registry.message(type_name)
         self.state.graph.declare_type(name, spec.name)
-        self.state.graph.add_publisher(name, node, None, latch=False)
+        entry = self.state.graph.add_publisher(name, node, None, latch=latch)
         message = TopicMessage(name, spec.name, normalize(spec, msg, now_ns=now_ns), now_ns,
                                self.state.registry, cdr)
+        if latch:
+            entry.latched = message
         ctx.publish(message, node)
         return ctx.effects
 

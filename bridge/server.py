@@ -23,8 +23,10 @@ from bridge.config import BridgeConfig
 from bridge.core import BridgeCore
 from bridge.effects import Close, Effect, Schedule, Send
 from bridge.http import HttpRoutes
-from bridge.outgoing import WireFrame, render
+from bridge.outgoing import Delivery, WireFrame, render
 from bridge.sendqueue import SendQueue
+from bridge.stats import BridgeTelemetry
+from bridge.webapp import default_web_root, mount_webapp
 from schemas.errors import SchemaError
 from schemas.registry import TypeRegistry
 
@@ -74,6 +76,9 @@ class BridgeServer:
         self._server: Server | None = None
         self._closing: set[asyncio.Task[None]] = set()
         self.http = HttpRoutes()  # plain HTTP on the websocket port; others add routes
+        mount_webapp(self.http, config.web_root or default_web_root())
+        self.telemetry = BridgeTelemetry(self)  # spans, stats service, /metrics
+        self._telemetry_task: asyncio.Task[None] | None = None
 
     @property
     def port(self) -> int:
@@ -87,9 +92,13 @@ class BridgeServer:
             write_limit=WRITE_HIGH_WATER, close_timeout=CLOSE_TIMEOUT_S,
             process_request=self.http,
         )
+        self._telemetry_task = asyncio.create_task(self.telemetry.run(self.apply),
+                                                   name="bridge-telemetry")
 
     async def stop(self) -> None:
         """Close every connection (1001), stop timers and workers."""
+        if self._telemetry_task is not None:
+            self._telemetry_task.cancel()
         if self._server is not None:
             self._server.close()
             try:
@@ -113,6 +122,7 @@ class BridgeServer:
         client_id = self.core.connect(peer)
         link = self.links[client_id] = ClientLink(client_id, ws, self.config.send_queue)
         link.writer = asyncio.create_task(self._write(link), name=f"bridge-writer-{client_id}")
+        self.apply(self.telemetry.clients_changed())
         try:
             async for data in ws:
                 self.apply(await self._receive(client_id, data))
@@ -125,18 +135,22 @@ class BridgeServer:
             del self.links[client_id]
             link.writer.cancel()
             self.apply(self.core.disconnect(client_id, time.time_ns()))
+            self.apply(self.telemetry.clients_changed())
             with contextlib.suppress(asyncio.CancelledError):
                 await link.writer
 
     async def _receive(self, client_id: int, data: bytes | str) -> list[Effect]:
+        arrived_ns = time.time_ns()
         if len(data) < self.config.offload_threshold_bytes:
-            return self.core.receive(client_id, data, time.time_ns())
+            self.telemetry.tracer.frame_arrived(arrived_ns, len(data))
+            return self.core.receive(client_id, data, arrived_ns)
         loop = asyncio.get_running_loop()
         try:
             decoded = await loop.run_in_executor(self._pool, self.core.prepare, data,
                                                  time.time_ns())
         except SchemaError as exc:
             return self.core.receive_invalid(client_id, str(exc), time.time_ns())
+        self.telemetry.tracer.frame_arrived(arrived_ns, len(data))
         return self.core.receive_decoded(client_id, decoded, time.time_ns())
 
     async def _write(self, link: ClientLink) -> None:
@@ -157,12 +171,17 @@ class BridgeServer:
                 continue
             sequence += 1
             frames = await self._render(send, f"fragment:{sequence}")
+            handed_ns = time.time_ns()
             try:
                 for frame in frames:
+                    handed_ns = time.time_ns()  # websockets writes it to the transport now
                     await link.ws.send(frame.data, text=frame.text)
                     link.frames_sent += 1
             except ConnectionClosed:
                 return
+            if isinstance(send.item, Delivery):
+                self.telemetry.tracer.delivered(link.client_id, send.item,
+                                                sum(len(f.data) for f in frames), handed_ns)
 
     async def _render(self, send: Send, fallback_id: str) -> list[WireFrame]:
         try:

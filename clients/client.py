@@ -26,6 +26,7 @@ from __future__ import annotations
 import asyncio
 import logging
 import random
+import time
 from collections.abc import Mapping
 from concurrent.futures import ThreadPoolExecutor
 from types import MappingProxyType
@@ -54,6 +55,7 @@ from clients.publisher import PublishStats, TopicPublisher
 from clients.reader import FramePump
 from clients.services import Handler, ServiceHost, normalize_service_values
 from clients.subscription import DEFAULT_MAXSIZE, Subscription
+from clients.tracing import Tracer
 from clients.wire import Frame, payload_bytes
 from schemas.registry import TypeRegistry
 
@@ -80,14 +82,17 @@ class RosbridgeClient:
     registry : message types for normalizing typed subscriptions; a default one if omitted.
     offload_bytes : payload size from which encode/decode run on worker threads; the default
         depends on the encoding (:data:`OFFLOAD_BYTES`).
+    tracer : records ``encode``/``send``/``decode`` spans of stamped messages
+        (:mod:`clients.tracing`, docs/tracing.md); None records nothing.
     """
 
     def __init__(self, url: str, *, encoding: Encoding = "cbor", name: str = "rosbridge-client",
                  connect_timeout: float = 10.0, reconnect: bool = True,
                  backoff_initial: float = 0.1, backoff_max: float = 2.0,
                  registry: TypeRegistry | None = None, offload_bytes: int | None = None,
-                 transport: TransportConfig | None = None) -> None:
+                 transport: TransportConfig | None = None, tracer: Tracer | None = None) -> None:
         self.url = url
+        self.tracer = tracer
         self.name = name
         self._registry = registry if registry is not None else TypeRegistry.with_defaults()
         self._protocol = ClientProtocol(encoding=encoding, spec_lookup=self._registry.message)
@@ -107,6 +112,9 @@ class RosbridgeClient:
         self._services = ServiceHost(self._registry, self._send)
         self._action_host = ActionHost(self._registry, self._send)
         self._publishers: dict[str, TopicPublisher] = {}
+        # latched topic -> its last message, re-sent on every new connection (a restarted
+        # bridge has forgotten it, and late subscribers such as tf listeners need it)
+        self._latched: dict[str, dict[str, Any] | None] = {}
         self._encode_pool = ThreadPoolExecutor(1, thread_name_prefix=f"{name}-encode")
         self._decode_pool = ThreadPoolExecutor(1, thread_name_prefix=f"{name}-decode")
         self._pump = FramePump(self._protocol, decode_pool=self._decode_pool,
@@ -190,10 +198,13 @@ class RosbridgeClient:
         """
         frame = self._protocol.advertise(topic, type, latch=latch, queue_size=queue_size)
         self._publisher(topic).latest_only = latest_only
+        if latch:
+            self._latched.setdefault(topic, None)
         await self._send_control(frame)
 
     async def unadvertise(self, topic: str) -> None:
         """Withdraw an advertisement made with :meth:`advertise`."""
+        self._latched.pop(topic, None)
         frame = self._protocol.unadvertise(topic)
         if frame is not None:
             await self._send_control(frame)
@@ -206,6 +217,8 @@ class RosbridgeClient:
         late. Without ``reconnect`` a closed connection raises :class:`ConnectionClosed`.
         """
         publisher = self._publisher(topic)
+        if topic in self._latched:
+            self._latched[topic] = msg
         try:
             if self._ws is None:
                 raise self._not_connected("publish")
@@ -214,6 +227,15 @@ class RosbridgeClient:
             if self._closed or not self._reconnect or self._run_task is None:
                 raise
             publisher.count_disconnected()
+
+    @property
+    def dropped(self) -> int:
+        """Messages this client dropped: full subscription queues, stale or unsendable
+        publishes."""
+        received = sum(sub.dropped for sub in self._subs.values())
+        sent = sum(p.stats.dropped_stale + p.stats.dropped_disconnected
+                   for p in self._publishers.values())
+        return received + sent
 
     def publish_stats(self, topic: str) -> PublishStats:
         """Counters of ``topic``'s send path (zeros for a topic never published)."""
@@ -341,8 +363,9 @@ class RosbridgeClient:
     def _publisher(self, topic: str) -> TopicPublisher:
         publisher = self._publishers.get(topic)
         if publisher is None:
+            on_sent = self.tracer.published if self.tracer is not None else None
             publisher = TopicPublisher(topic, latest_only=False, encode=self._encode,
-                                       send=self._send)
+                                       send=self._send, on_sent=on_sent)
             self._publishers[topic] = publisher
         return publisher
 
@@ -393,6 +416,9 @@ class RosbridgeClient:
         try:
             for frame in frames:
                 await self._send(frame)
+            for topic, msg in list(self._latched.items()):
+                if msg is not None:
+                    await self._publisher(topic).publish(msg)
         except ConnectionClosed as exc:
             logger.warning("%s lost the connection while resuming: %s", self.name, exc)
 
@@ -443,6 +469,8 @@ class RosbridgeClient:
         """Carry one routed event to its destination (never blocks the reader)."""
         match event:
             case TopicMessage(sub_ids=sub_ids, received=received):
+                if self.tracer is not None:
+                    self.tracer.received(received, time.time_ns())
                 for sub_id in sub_ids:
                     sub = self._subs.get(sub_id)
                     if sub is not None:

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import asyncio
 import logging
+import time
 from collections.abc import Awaitable, Callable
 from dataclasses import dataclass
 from typing import Any
@@ -22,6 +23,8 @@ logger = logging.getLogger(__name__)
 
 Encoder = Callable[[str, dict[str, Any]], Awaitable[Frame]]
 Sender = Callable[[Frame], Awaitable[None]]
+# (topic, msg, encode_start_ns, frame_ready_ns, sent_ns, wire_bytes): stage tracing hook
+SentHook = Callable[[str, dict[str, Any], int, int, int, int], None]
 
 
 @dataclass(frozen=True, slots=True)
@@ -45,11 +48,13 @@ class PublishStats:
 class TopicPublisher:
     """Serialises the messages of one topic onto the connection (event-loop thread only)."""
 
-    def __init__(self, topic: str, *, latest_only: bool, encode: Encoder, send: Sender) -> None:
+    def __init__(self, topic: str, *, latest_only: bool, encode: Encoder, send: Sender,
+                 on_sent: SentHook | None = None) -> None:
         self.topic = topic
         self.latest_only = latest_only
         self._encode = encode
         self._send = send
+        self._on_sent = on_sent
         self._slot: dict[str, Any] | None = None
         self._task: asyncio.Task[None] | None = None
         self._counts = {name: 0 for name in PublishStats.__dataclass_fields__}
@@ -78,10 +83,15 @@ class TopicPublisher:
         await self._send_one(msg)
 
     async def _send_one(self, msg: dict[str, Any]) -> None:
+        encode_start_ns = time.time_ns()
         frame = await self._encode(self.topic, msg)
+        ready_ns = time.time_ns()
         await self._send(frame)
         self._counts["sent"] += 1
         self._counts["wire_bytes"] += frame.wire_bytes
+        if self._on_sent is not None:
+            self._on_sent(self.topic, msg, encode_start_ns, ready_ns, time.time_ns(),
+                          frame.wire_bytes)
 
     async def _drain(self) -> None:
         """Send whatever sits in the slot until it stays empty."""

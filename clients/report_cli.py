@@ -1,0 +1,399 @@
+"""``riverbridge report``: run the stack (or attach to one) and report where time and bytes go.
+
+For each encoding (``--encoding json,cbor`` runs them in turn) it starts bridge, simulator and
+navigation through :class:`clients.launcher.Supervisor`, lets them warm up, then reads
+``/riverbridge/trace`` and ``/riverbridge/process_stats`` for ``--duration`` seconds as an
+ordinary rosbridge client, asks the bridge's ``/riverbridge/stats`` and samples ``lo``'s
+counters. It prints per topic rate, bytes, overhead and p50/p90/p99/max per stage next to the
+thesis's figures (stdout), shows progress on stderr, and can write ``--json`` and ``--plots``.
+
+Exit codes: 0 report written; 1 the stack failed or nothing was measured; 2 bad options.
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import contextlib
+import json
+import logging
+import math
+import os
+import sys
+import tempfile
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any, TextIO
+
+import numpy as np
+
+from clients.client import RosbridgeClient
+from clients.errors import RosbridgeError
+from clients.launcher import LaunchConfig, PrefixedOutput, Supervisor, stack_components
+from clients.report import (
+    SENSOR_TOPICS,
+    SpanRecord,
+    by_topic,
+    hosts_of,
+    journeys,
+    loopback_tx_bytes,
+    network_summary,
+    process_summary,
+    render_comparison,
+    render_run,
+    spans_of_batch,
+    stage_order,
+    stage_values,
+    topic_summary,
+)
+from schemas.tracing import (
+    NS_PER_S,
+    STATS_SERVICE,
+    STATS_SERVICE_TYPE,
+    STATS_TOPIC,
+    STATS_TYPE,
+    TRACE_TOPIC,
+    TRACE_TYPE,
+    header_stamp_ns,
+)
+
+log = logging.getLogger(__name__)
+
+ENCODINGS = ("json", "cbor")
+# Spans of a message arrive up to ~1 s (batch period) after its last stage; a LIDAR scan's
+# last stage ends ~0.2 s after capture. Wait this long after the window before summarising.
+TAIL_S = 2.5
+SAMPLE_TYPES = {"/lidar/points": "sensor_msgs/msg/PointCloud2",
+                "/radar/image": "riverbridge_msgs/msg/RadarImage",
+                "/camera/image/compressed": "sensor_msgs/msg/CompressedImage",
+                "/imu/data": "sensor_msgs/msg/Imu"}
+
+
+# --------------------------------------------------------------------------- progress
+
+
+class Progress:
+    """A progress bar on ``stream``: ``\\r`` updates on a TTY, a line every 5 s otherwise."""
+
+    def __init__(self, stream: TextIO, width: int = 30) -> None:
+        self._stream, self._width = stream, width
+        self._tty = stream.isatty()
+        self._last_line_s = -math.inf
+
+    def update(self, label: str, done_s: float, total_s: float) -> None:
+        fraction = min(1.0, done_s / total_s) if total_s > 0 else 1.0
+        if self._tty:
+            filled = int(fraction * self._width)
+            bar = "#" * filled + "-" * (self._width - filled)
+            self._stream.write(f"\r{label} [{bar}] {done_s:5.1f}/{total_s:.0f} s")
+        elif done_s - self._last_line_s >= 5.0 or fraction >= 1.0:
+            self._last_line_s = done_s
+            self._stream.write(f"{label}: {done_s:.0f}/{total_s:.0f} s\n")
+        self._stream.flush()
+
+    def message(self, text: str) -> None:
+        self._stream.write(("\r\x1b[K" if self._tty else "") + text + "\n")
+        self._stream.flush()
+
+
+# --------------------------------------------------------------------------- measuring
+
+
+def read_loopback() -> int | None:
+    try:
+        return loopback_tx_bytes(Path("/proc/net/dev").read_text())
+    except OSError:
+        return None
+
+
+def describe_sample(topic: str, msg: dict[str, Any]) -> str:
+    """The payload of one sensor message in words (points per scan, cells, bytes)."""
+    if topic == "/lidar/points":
+        return f"{int(msg['width']) * int(msg['height']):,} points x {msg['point_step']} B"
+    if topic == "/radar/image":
+        return f"{msg['num_beams']} beams x {msg['num_cells']} cells float32"
+    if topic == "/camera/image/compressed":
+        return f"{msg['format']} {len(msg['data']):,} B"
+    return "one sample"
+
+
+async def sample_payloads(client: RosbridgeClient, timeout_s: float = 3.0) -> dict[str, str]:
+    """One message of each sensor topic, described; after the window, so it costs nothing
+    during the measurement."""
+    samples: dict[str, str] = {}
+    for topic, type_name in SAMPLE_TYPES.items():
+        sub = await client.subscribe(topic, type_name, maxsize=1)
+        with contextlib.suppress(TimeoutError):
+            async with asyncio.timeout(timeout_s):
+                samples[topic] = describe_sample(topic, (await sub.get()).msg)
+        await sub.unsubscribe()
+    return samples
+
+
+async def measure(url: str, encoding: str, duration_s: float, warmup_s: float,
+                  progress: Progress) -> dict[str, Any]:
+    """Read the telemetry of the stack at ``url`` for ``duration_s`` after ``warmup_s``."""
+    async with RosbridgeClient(url, encoding="cbor", name="report", reconnect=False,
+                               connect_timeout=3.0) as client:
+        trace = await client.subscribe(TRACE_TOPIC, TRACE_TYPE, maxsize=100_000)
+        stats = await client.subscribe(STATS_TOPIC, STATS_TYPE, maxsize=100_000)
+        await _wait(warmup_s, f"{encoding} warm-up", progress)
+        start_ns, lo_start = time.time_ns(), read_loopback()
+        await _wait(duration_s, f"{encoding} measuring", progress)
+        end_ns, lo_end = time.time_ns(), read_loopback()
+        load = os.getloadavg()
+        await _wait(TAIL_S, f"{encoding} collecting", progress)
+        bridge_stats = await client.call_service(STATS_SERVICE, type=STATS_SERVICE_TYPE)
+        spans = [s for batch in _drain(trace) for s in spans_of_batch(batch)
+                 if start_ns <= s.stamp_ns <= end_ns]
+        process_stats = [m for m in _drain(stats)
+                         if start_ns <= (header_stamp_ns(m) or 0) <= end_ns + TAIL_S * NS_PER_S]
+        samples = await sample_payloads(client)
+    lo_bytes = lo_end - lo_start if lo_start is not None and lo_end is not None else None
+    run = build_run(encoding, spans, process_stats, bridge_stats, samples,
+                    (end_ns - start_ns) / NS_PER_S, lo_bytes)
+    run["machine"] = {"cpus": os.cpu_count(), "load_average_1_5_15": list(load)}
+    return run
+
+
+def build_run(encoding: str, spans: list[SpanRecord], process_stats: list[dict[str, Any]],
+              bridge_stats: dict[str, Any], samples: dict[str, str], duration_s: float,
+              loopback_bytes: int | None) -> dict[str, Any]:
+    """Everything the report says about one run (JSON-ready but for NaNs)."""
+    grouped = by_topic(journeys(spans))
+    topics = {t: topic_summary(t, items, duration_s) for t, items in grouped.items()}
+    return {"encoding": encoding, "duration_s": duration_s, "hosts": hosts_of(spans),
+            "spans": len(spans), "topics": topics, "samples": samples,
+            "processes": process_summary(process_stats),
+            "network": network_summary(topics, loopback_bytes, duration_s),
+            "bridge": bridge_stats,
+            "_values": {t: stage_values(items) for t, items in grouped.items()}}
+
+
+def _drain(sub: Any) -> list[dict[str, Any]]:
+    items = []
+    while (item := sub.get_nowait()) is not None:
+        items.append(item.msg)
+    return items
+
+
+async def _wait(seconds: float, label: str, progress: Progress) -> None:
+    loop = asyncio.get_running_loop()
+    start = loop.time()
+    while (done := loop.time() - start) < seconds:
+        progress.update(label, done, seconds)
+        await asyncio.sleep(min(0.5, seconds - done))
+    progress.update(label, seconds, seconds)
+    progress.message(f"{label}: done")
+
+
+async def run_stack(encoding: str, args: argparse.Namespace, progress: Progress,
+                    log_stream: TextIO) -> dict[str, Any]:
+    """Start the stack with ``encoding``, measure it, stop it. Raises RuntimeError."""
+    config = LaunchConfig(port=0, encoding=encoding, sim_config=args.sim_config,
+                          nav_config=args.nav_config, startup_timeout_s=args.startup_timeout)
+    stop = asyncio.Event()
+    measuring: list[asyncio.Task[dict[str, Any]]] = []
+
+    def on_ready(url: str) -> None:
+        progress.message(f"{encoding}: stack ready at {url}")
+        task = asyncio.create_task(measure(url, encoding, args.duration, args.warmup, progress))
+        task.add_done_callback(lambda _: stop.set())
+        measuring.append(task)
+
+    progress.message(f"{encoding}: starting bridge, simulator and navigation")
+    supervisor = Supervisor(stack_components(config), config,
+                            PrefixedOutput(log_stream, colour=False), on_ready=on_ready)
+    status = await supervisor.run(stop)
+    if not measuring:
+        raise RuntimeError(f"the {encoding} stack did not start (exit status {status})")
+    task = measuring[0]
+    if not task.done():
+        task.cancel()
+        raise RuntimeError(f"the {encoding} stack stopped during the measurement")
+    return task.result()
+
+
+# --------------------------------------------------------------------------- output
+
+
+def json_ready(value: Any) -> Any:
+    """NaN and infinities become null (strict JSON); private keys (``_values``) are left out."""
+    if isinstance(value, np.ndarray | np.generic):
+        value = value.tolist()
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    if isinstance(value, dict):
+        return {k: json_ready(v) for k, v in value.items() if not str(k).startswith("_")}
+    if isinstance(value, list | tuple):
+        return [json_ready(v) for v in value]
+    return value
+
+
+def write_plots(runs: list[dict[str, Any]], folder: Path) -> list[Path]:
+    """Box plots per topic and stage (like thesis figures 4.1-4.4) and a bytes chart."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from matplotlib import pyplot as plt
+
+    folder.mkdir(parents=True, exist_ok=True)
+    written = []
+    for run in runs:
+        for topic, values in run["_values"].items():
+            stages = stage_order(s for s in values if values[s])
+            if not stages:
+                continue
+            sample = run["samples"].get(topic, "")
+            fig, ax = plt.subplots(figsize=(max(6.0, 0.8 * len(stages)), 4.5))
+            ax.boxplot([values[s] for s in stages], showfliers=True)
+            ax.set_xticks(range(1, len(stages) + 1), stages, rotation=45, ha="right")
+            ax.set_ylabel("ms")
+            ax.set_title(f"{topic} ({run['encoding']}) {sample}")
+            ax.grid(axis="y", alpha=0.3)
+            fig.tight_layout()
+            path = folder / f"{run['encoding']}{topic.replace('/', '_')}.png"
+            fig.savefig(path, dpi=100)
+            plt.close(fig)
+            written.append(path)
+    written.append(_bytes_chart(runs, folder, plt))
+    return written
+
+
+def _bytes_chart(runs: list[dict[str, Any]], folder: Path, plt: Any) -> Path:
+    topics = sorted({t for run in runs for t in run["topics"]})
+    fig, ax = plt.subplots(figsize=(max(7.0, 1.1 * len(topics)), 4.5))
+    width = 0.8 / (1 + 2 * len(runs))
+    positions = list(range(len(topics)))
+    first = runs[0]["topics"]
+    ax.bar([p for p in positions], [first[t]["payload_bytes"] if t in first else 0
+                                    for t in topics], width, label="payload (CDR)")
+    for k, run in enumerate(runs, start=1):
+        ax.bar([p + k * width for p in positions],
+               [run["topics"].get(t, {}).get("wire_in_bytes", 0) for t in topics], width,
+               label=f"wire ({run['encoding']})")
+    ax.set_yscale("log")
+    ax.set_xticks([p + width * len(runs) / 2 for p in positions], topics, rotation=30,
+                  ha="right")
+    ax.set_ylabel("bytes per message")
+    ax.legend()
+    fig.tight_layout()
+    path = folder / "bytes.png"
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+    return path
+
+
+# --------------------------------------------------------------------------- CLI
+
+
+def _seconds(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number of seconds: {text!r}") from None
+    if not value > 0:
+        raise argparse.ArgumentTypeError(f"must be positive, got {text}")
+    return value
+
+
+def _encodings(text: str) -> tuple[str, ...]:
+    names = tuple(name.strip() for name in text.split(",") if name.strip())
+    unknown = [name for name in names if name not in ENCODINGS]
+    if not names or unknown:
+        raise argparse.ArgumentTypeError(f"choose from {', '.join(ENCODINGS)}, got {text!r}")
+    return names
+
+
+def _existing_file(text: str) -> Path:
+    path = Path(text)
+    if not path.is_file():
+        raise argparse.ArgumentTypeError(f"no such file: {text}")
+    return path.resolve()
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="riverbridge report", description="Run the stack (or attach to a running one) "
+        "and report per topic and stage where time and bytes go, next to the thesis's figures.")
+    parser.add_argument("--duration", type=_seconds, default=30.0, metavar="S",
+                        help="seconds to measure per encoding (default %(default)s)")
+    parser.add_argument("--warmup", type=_seconds, default=5.0, metavar="S",
+                        help="seconds to let the stack settle first (default %(default)s)")
+    parser.add_argument("--encoding", type=_encodings, default=("cbor",), metavar="LIST",
+                        help="comma-separated encodings to run in turn: json, cbor "
+                        "(default cbor; ignored with --bridge)")
+    parser.add_argument("--bridge", metavar="URL",
+                        help="attach to the running stack at ws://HOST:PORT instead")
+    parser.add_argument("--json", type=Path, metavar="FILE", help="write everything as JSON")
+    parser.add_argument("--plots", type=Path, metavar="DIR", help="write PNG box plots here")
+    parser.add_argument("--sim-config", type=_existing_file, metavar="FILE")
+    parser.add_argument("--nav-config", type=_existing_file, metavar="FILE")
+    parser.add_argument("--startup-timeout", type=_seconds, default=120.0, metavar="S")
+    parser.add_argument("--log", type=Path, metavar="FILE",
+                        help="where the stack's logs go (default: a file in the temp folder)")
+    return parser
+
+
+def check_paths(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
+    """Refuse unwritable outputs before spending minutes measuring (exit 2)."""
+    if args.bridge is not None and not args.bridge.startswith(("ws://", "wss://")):
+        parser.error(f"argument --bridge: not a ws:// URL: {args.bridge}")
+    for option, path in (("--json", args.json), ("--log", args.log)):
+        if path is not None and (path.is_dir() or not path.parent.is_dir()):
+            parser.error(f"argument {option}: cannot write {path}")
+    if args.plots is not None:
+        try:
+            args.plots.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            parser.error(f"argument --plots: cannot create {args.plots}: {exc.strerror}")
+
+
+async def _run_all(args: argparse.Namespace, progress: Progress,
+                   log_stream: TextIO) -> list[dict[str, Any]]:
+    if args.bridge is not None:
+        return [await measure(args.bridge, "attached", args.duration, args.warmup, progress)]
+    return [await run_stack(encoding, args, progress, log_stream) for encoding in args.encoding]
+
+
+def main(argv: list[str] | None = None, *, stdout: TextIO | None = None,
+         stderr: TextIO | None = None) -> int:
+    out, err = stdout or sys.stdout, stderr or sys.stderr
+    parser = build_parser()
+    try:
+        args = parser.parse_args(argv)
+        check_paths(parser, args)
+    except SystemExit as exc:
+        return int(exc.code or 0)
+    progress = Progress(err)
+    log_path = args.log or Path(tempfile.gettempdir()) / "riverbridge-report.log"
+    try:
+        with open(log_path, "w", encoding="utf-8") as log_stream:
+            runs = asyncio.run(_run_all(args, progress, log_stream))
+    except (RuntimeError, RosbridgeError, OSError, TimeoutError) as exc:
+        progress.message(f"riverbridge report: {exc} (stack logs: {log_path})")
+        return 1
+    return _emit(runs, args, out, progress)
+
+
+def _emit(runs: list[dict[str, Any]], args: argparse.Namespace, out: TextIO,
+          progress: Progress) -> int:
+    write: Callable[[str], Any] = out.write
+    for run in runs:
+        write(render_run(run) + "\n\n")
+    if len(runs) > 1:
+        write(render_comparison(runs) + "\n")
+    if args.json is not None:
+        document = {"runs": json_ready(runs), "sensor_topics": list(SENSOR_TOPICS)}
+        args.json.write_text(json.dumps(document, indent=1), encoding="utf-8")
+        progress.message(f"wrote {args.json}")
+    if args.plots is not None:
+        for path in write_plots(runs, args.plots):
+            log.debug("wrote %s", path)
+        progress.message(f"wrote plots to {args.plots}")
+    return 0 if any(run["spans"] for run in runs) else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

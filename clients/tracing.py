@@ -1,0 +1,151 @@
+"""Stage tracing for client processes: record spans cheaply, publish them once a second.
+
+A :class:`Tracer` is handed to :class:`clients.RosbridgeClient` (``tracer=``), which records
+``encode`` and ``send`` for every publish and ``decode`` for every received message that has a
+``header.stamp``; the simulator and navigation record their own stages (``generate``,
+``wait``, ``process``...) into the same tracer. :func:`telemetry` publishes the spans on
+``/riverbridge/trace`` and the process's counters on ``/riverbridge/process_stats`` about
+once a second (docs/tracing.md). Recording costs a few ``time.time_ns()`` calls and one
+tuple append; it never waits.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import logging
+import time
+from collections import OrderedDict
+from collections.abc import AsyncIterator, Callable
+from typing import TYPE_CHECKING, Any
+
+from clients.events import Received
+from schemas.tracing import (
+    PUBLISH_PERIOD_S,
+    SPAN_CAPACITY,
+    STATS_TOPIC,
+    STATS_TYPE,
+    TRACE_TOPIC,
+    TRACE_TYPE,
+    ResourceSampler,
+    SpanBuffer,
+    header_stamp_ns,
+    is_traced,
+    process_stats_msg,
+    span_array_msg,
+)
+
+if TYPE_CHECKING:
+    from clients.client import RosbridgeClient
+
+log = logging.getLogger(__name__)
+
+# Decode times remembered for `decoded_ns`: a second of every subscribed stamped topic.
+DECODED_MEMORY = 256
+
+
+class Tracer:
+    """Spans and counters of one process (``process`` names it in every span and stats)."""
+
+    def __init__(self, process: str, capacity: int = SPAN_CAPACITY) -> None:
+        self.process = process
+        self.spans = SpanBuffer(capacity)
+        self.counters = {"messages_out": 0, "messages_in": 0, "bytes_out": 0, "bytes_in": 0}
+        self._sampler = ResourceSampler()
+        self._decoded: OrderedDict[tuple[str, int], int] = OrderedDict()
+
+    def record(self, topic: str, stamp_ns: int, stage: str, start_ns: int, end_ns: int,
+               payload_bytes: int = 0, wire_bytes: int = 0) -> None:
+        """One stage of the message ``(topic, stamp_ns)``, wall-clock ns."""
+        self.spans.record(topic, stamp_ns, stage, start_ns, end_ns, payload_bytes, wire_bytes)
+
+    def published(self, topic: str, msg: dict[str, Any], encode_start_ns: int, ready_ns: int,
+                  sent_ns: int, wire_bytes: int) -> None:
+        """A publish went out: ``encode`` (start → frame ready) and ``send`` (→ send returned)."""
+        counters = self.counters
+        counters["messages_out"] += 1
+        counters["bytes_out"] += wire_bytes
+        stamp_ns = header_stamp_ns(msg)
+        if stamp_ns is None or not is_traced(topic):
+            return
+        self.spans.record(topic, stamp_ns, "encode", encode_start_ns, ready_ns, 0, wire_bytes)
+        self.spans.record(topic, stamp_ns, "send", ready_ns, sent_ns, 0, wire_bytes)
+
+    def received(self, received: Received, decoded_ns: int) -> None:
+        """A message arrived: ``decode`` (frame received → decoded, handed to subscribers)."""
+        counters = self.counters
+        counters["messages_in"] += 1
+        counters["bytes_in"] += received.wire_bytes
+        stamp_ns = header_stamp_ns(received.msg)
+        if stamp_ns is None or not is_traced(received.topic):
+            return
+        self.spans.record(received.topic, stamp_ns, "decode", received.recv_ns, decoded_ns, 0,
+                          received.wire_bytes)
+        self._decoded[(received.topic, stamp_ns)] = decoded_ns
+        if len(self._decoded) > DECODED_MEMORY:
+            self._decoded.popitem(last=False)
+
+    def decoded_ns(self, topic: str, stamp_ns: int, default: int) -> int:
+        """When the message ``(topic, stamp_ns)`` was decoded (the start of its ``wait``),
+        or ``default`` if it is no longer remembered."""
+        return self._decoded.pop((topic, stamp_ns), default)
+
+    def processed(self, topic: str, stamp_ns: int | None, start_ns: int, end_ns: int,
+                  queued_ns: int, steps: dict[str, tuple[int, int]] | None = None) -> None:
+        """A consumer processed ``(topic, stamp_ns)``: ``wait`` (decoded → start; ``queued_ns``
+        if the decode time is forgotten), ``process`` (start → end) and ``process.<step>``."""
+        if stamp_ns is None:
+            return
+        record = self.spans.record
+        record(topic, stamp_ns, "wait", self.decoded_ns(topic, stamp_ns, queued_ns), start_ns)
+        record(topic, stamp_ns, "process", start_ns, end_ns)
+        for step, (step_start_ns, step_end_ns) in (steps or {}).items():
+            record(topic, stamp_ns, f"process.{step}", step_start_ns, step_end_ns)
+
+    def batch_msg(self) -> dict[str, Any] | None:
+        """The spans recorded since the last batch as a TraceSpanArray, or None if none."""
+        spans = self.spans.drain()
+        return span_array_msg(self.process, spans) if spans else None
+
+    def stats_msg(self, now_ns: int, dropped: int) -> dict[str, Any]:
+        """This process's ProcessStats now; ``dropped`` counts messages its queues dropped."""
+        return process_stats_msg(self.process, now_ns, self._sampler.cpu_percent(),
+                                 self._sampler.rss_bytes(), {**self.counters, "dropped": dropped})
+
+
+@contextlib.asynccontextmanager
+async def telemetry(client: RosbridgeClient, tracer: Tracer,
+                    period_s: float = PUBLISH_PERIOD_S,
+                    dropped: Callable[[], int] | None = None) -> AsyncIterator[None]:
+    """Publish ``tracer``'s batches and stats through ``client`` every ``period_s`` meanwhile.
+
+    ``dropped`` reports the process's dropped-message count (default: the client's own).
+    The last batch is published when the block ends.
+    """
+    count_dropped = dropped or (lambda: client.dropped)
+    await client.advertise(TRACE_TOPIC, TRACE_TYPE)
+    await client.advertise(STATS_TOPIC, STATS_TYPE)
+
+    async def publish_once() -> None:
+        batch = tracer.batch_msg()
+        if batch is not None:
+            await client.publish(TRACE_TOPIC, batch)
+        await client.publish(STATS_TOPIC, tracer.stats_msg(time.time_ns(), count_dropped()))
+
+    async def loop() -> None:
+        while True:
+            await asyncio.sleep(period_s)
+            try:
+                await publish_once()
+            except Exception:  # telemetry must never end the process it observes
+                log.exception("%s: publishing telemetry failed", tracer.process)
+
+    task = asyncio.create_task(loop(), name=f"{tracer.process} telemetry")
+    try:
+        yield
+    finally:
+        task.cancel()
+        with contextlib.suppress(asyncio.CancelledError):
+            await task
+        with contextlib.suppress(Exception):
+            await publish_once()
