@@ -19,6 +19,11 @@ from simulator.scene import Scene
 
 T = TypeVar("T")
 
+# Scans are ordered by elevation, so equal halves are not equal work: the downward half hits
+# terrain and water on every ray, the upward half mostly misses. Several chunks per thread let
+# the pool balance them (full LIDAR scan, 2 threads: median 40 -> 30 ms, min unchanged 27 ms).
+CHUNKS_PER_THREAD = 4
+
 
 def fill_origins(origins: np.ndarray, origin: np.ndarray) -> None:
     """Set every row of `origins` (n, 3) to `origin` (3,): column fills, 4x faster than a
@@ -87,7 +92,7 @@ class RayCaster:
         """
         n = len(directions)
         self._reserve(n)
-        bounds = np.linspace(0, n, self._threads + 1).astype(int)
+        bounds = np.linspace(0, n, self._threads * CHUNKS_PER_THREAD + 1).astype(int)
         chunks = [slice(a, b) for a, b in itertools.pairwise(bounds) if b > a]
 
         def run(chunk: slice) -> T:
