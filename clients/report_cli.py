@@ -47,6 +47,7 @@ from clients.report import (
     stage_values,
     topic_summary,
 )
+from clients.up_cli import positive_seconds
 from schemas.tracing import (
     NS_PER_S,
     STATS_SERVICE,
@@ -288,16 +289,6 @@ def _bytes_chart(runs: list[dict[str, Any]], folder: Path, plt: Any) -> Path:
 # --------------------------------------------------------------------------- CLI
 
 
-def _seconds(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number of seconds: {text!r}") from None
-    if not value > 0:
-        raise argparse.ArgumentTypeError(f"must be positive, got {text}")
-    return value
-
-
 def _encodings(text: str) -> tuple[str, ...]:
     names = tuple(name.strip() for name in text.split(",") if name.strip())
     unknown = [name for name in names if name not in ENCODINGS]
@@ -317,9 +308,9 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="riverbridge report", description="Run the stack (or attach to a running one) "
         "and report per topic and stage where time and bytes go, next to the thesis's figures.")
-    parser.add_argument("--duration", type=_seconds, default=30.0, metavar="S",
+    parser.add_argument("--duration", type=positive_seconds, default=30.0, metavar="S",
                         help="seconds to measure per encoding (default %(default)s)")
-    parser.add_argument("--warmup", type=_seconds, default=5.0, metavar="S",
+    parser.add_argument("--warmup", type=positive_seconds, default=5.0, metavar="S",
                         help="seconds to let the stack settle first (default %(default)s)")
     parser.add_argument("--encoding", type=_encodings, default=("cbor",), metavar="LIST",
                         help="comma-separated encodings to run in turn: json, cbor "
@@ -330,7 +321,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--plots", type=Path, metavar="DIR", help="write PNG box plots here")
     parser.add_argument("--sim-config", type=_existing_file, metavar="FILE")
     parser.add_argument("--nav-config", type=_existing_file, metavar="FILE")
-    parser.add_argument("--startup-timeout", type=_seconds, default=120.0, metavar="S")
+    parser.add_argument("--startup-timeout", type=positive_seconds, default=120.0, metavar="S")
     parser.add_argument("--log", type=Path, metavar="FILE",
                         help="where the stack's logs go (default: a file in the temp folder)")
     return parser

@@ -38,7 +38,8 @@ def _port(text: str) -> int:
     return value
 
 
-def _seconds(text: str) -> float:
+def positive_seconds(text: str) -> float:
+    """argparse type: a positive number of seconds (shared by the stack commands)."""
     try:
         value = float(text)
     except ValueError:
@@ -71,10 +72,11 @@ def build_parser() -> argparse.ArgumentParser:
                         help="simulator TOML configuration")
     parser.add_argument("--nav-config", type=_toml_file, metavar="FILE",
                         help="navigation TOML configuration")
-    parser.add_argument("--startup-timeout", type=_seconds, default=defaults.startup_timeout_s,
+    parser.add_argument("--startup-timeout", type=positive_seconds,
+                        default=defaults.startup_timeout_s,
                         metavar="S", help="seconds for all three to become ready "
                         "(default %(default)s)")
-    parser.add_argument("--stop-timeout", type=_seconds, default=defaults.stop_timeout_s,
+    parser.add_argument("--stop-timeout", type=positive_seconds, default=defaults.stop_timeout_s,
                         metavar="S", help="seconds per shutdown step (SIGINT, SIGTERM, SIGKILL; "
                         "default %(default)s)")
     return parser
