@@ -14,6 +14,7 @@ from typing import Literal
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 ClusterMethod = Literal["dbscan", "kmeans", "birch"]
+LidarWorkerKind = Literal["process", "thread"]
 CfarKind = Literal["ca", "soca", "goca", "os"]
 
 
@@ -67,6 +68,10 @@ class LidarConfig(_Frozen):
     # scikit-learn neighbour-query workers; one keeps the second core for the other sensors
     # (on the ~1-5k obstacle points left after filtering, -1 measured slower here).
     n_jobs: int | None = None
+    # Where the LIDAR step runs (ours, DESIGN §4): "process", a warm worker process, keeps
+    # scikit-learn's GIL-holding stretches off the event loop that reads the IMU; "thread",
+    # a thread of the navigation process (no extra process; IMU tail of tens of ms under load).
+    worker: LidarWorkerKind = "process"
 
     @model_validator(mode="after")
     def _check_range(self) -> LidarConfig:

@@ -2,24 +2,25 @@
 
 The edge (``navigation.node``) runs each handler on its sensor's worker thread and publishes
 what it returns; keeping them here makes the whole message path testable without a bridge.
+The LIDAR handler hands the points to a ``LidarWorker`` (by default a worker process, see
+``navigation.lidar_worker``); ``start`` and ``close`` bracket its life.
 """
 
 from __future__ import annotations
 
 import threading
-import time
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
-from navigation.boxes import Boxes, refine_boxes
+from navigation.boxes import Boxes
 from navigation.camera import extract_lines, line_array_msg
 from navigation.cfar import CfarDetector
-from navigation.config import LidarConfig, NavigationConfig
+from navigation.config import NavigationConfig
 from navigation.fusion import obstacle_grid, occupancy_grid_msg
-from navigation.lidar import NOISE, LidarResult, cluster_obstacles, obstacle_points
 from navigation.lidar_messages import box_array_msg, marker_array_msg
+from navigation.lidar_worker import LidarWorker, StepTimes, lidar_worker_for
 from navigation.messages import stamp_ns_of
 from navigation.pointcloud import xyzi_view
 from navigation.radar import PolarGeometry, detect, detection_array_msg, radar_power
@@ -41,8 +42,6 @@ OUTPUT_TYPES = {
 }
 
 Outputs = list[tuple[str, dict[str, Any]]]
-# Sub-step name -> (start_ns, end_ns) wall clock, filled by a handler for stage tracing
-StepTimes = dict[str, tuple[int, int]]
 
 
 @dataclass
@@ -75,20 +74,29 @@ class LatestObstacles:
 class Processors:
     """The navigation service's handlers for one configuration."""
 
-    def __init__(self, config: NavigationConfig) -> None:
+    def __init__(self, config: NavigationConfig, lidar_worker: LidarWorker | None = None) -> None:
+        """``lidar_worker`` defaults to the one ``config.lidar.worker`` names."""
         self.config = config
         self.latest = LatestObstacles()
         self._detectors: dict[int, CfarDetector] = {}  # by row length; rows rarely change
         self.lidar_steps: StepTimes = {}  # sub-step spans of the last scan (see `lidar`)
+        self.lidar_worker = lidar_worker or lidar_worker_for(config.lidar)
+
+    def start(self) -> None:
+        """Start (and warm up) the LIDAR worker; blocks for its start-up, seconds."""
+        self.lidar_worker.start()
+
+    def close(self) -> None:
+        """Stop the LIDAR worker; waits for a scan in progress."""
+        self.lidar_worker.close()
 
     def lidar(self, msg: dict[str, Any]) -> Outputs:
         """PointCloud2 -> BoxArray and MarkerArray (thesis 3.5.3). Leaves the wall-clock
         spans of ``filter``, ``dbscan`` and ``boxes`` (the thesis's 29 ms and 186 ms) in
         ``lidar_steps`` for stage tracing (one LIDAR thread, so read it after the call)."""
         stamp_ns, frame_id = stamp_ns_of(msg["header"]), msg["header"]["frame_id"]
-        steps: StepTimes = {}
-        result = timed_process_scan(xyzi_view(msg), self.config.lidar, steps)
-        self.lidar_steps = steps
+        result = self.lidar_worker(xyzi_view(msg))
+        self.lidar_steps = result.steps
         self.latest.set_boxes(result.boxes, stamp_ns)
         method = self.config.lidar.method
         boxes = box_array_msg(result.boxes, stamp_ns, frame_id, method, result.num_clusters)
@@ -124,22 +132,3 @@ class Processors:
         grid = obstacle_grid(boxes, radar_xy_m, self.config.fusion)
         return [(TOPIC_MAP, occupancy_grid_msg(grid, stamp_ns, self.config.fusion))]
 
-
-def timed_process_scan(points: np.ndarray, config: LidarConfig,
-                       steps: StepTimes) -> LidarResult:
-    """`navigation.lidar.process_scan`, step by step, with each step's wall-clock span put
-    in ``steps``. points : (n, >=3) float32, sensor frame, metres."""
-    t0 = time.time_ns()
-    keep, water_z = obstacle_points(points, config)
-    index = np.flatnonzero(keep)
-    xyz = np.ascontiguousarray(points[index, :3])
-    t1 = time.time_ns()
-    obstacle_labels, samples = cluster_obstacles(xyz, config)
-    t2 = time.time_ns()
-    boxes = refine_boxes(xyz, obstacle_labels, config.box_max_size_m, config.shrink_boxes)
-    t3 = time.time_ns()
-    steps.update(filter=(t0, t1), dbscan=(t1, t2), boxes=(t2, t3))
-    labels = np.full(points.shape[0], NOISE, dtype=np.int32)
-    labels[index] = obstacle_labels
-    num_clusters = int(np.unique(obstacle_labels[obstacle_labels >= 0]).size)
-    return LidarResult(labels, keep, boxes, num_clusters, samples, water_z)

@@ -31,6 +31,13 @@ def test_toml_overrides_nested_values(tmp_path):
     assert config.cfar.os_rank == 60 and config.camera.threshold == 190
 
 
+def test_lidar_worker_defaults_to_a_process_and_names_only_known_kinds():
+    assert NavigationConfig().lidar.worker == "process"
+    assert NavigationConfig.model_validate({"lidar": {"worker": "thread"}}).lidar.worker == "thread"
+    with pytest.raises(pydantic.ValidationError, match="worker"):
+        NavigationConfig.model_validate({"lidar": {"worker": "fork"}})
+
+
 def test_wrong_field_is_named(tmp_path):
     path = tmp_path / "nav.toml"
     path.write_text("[lidar]\nepsilon = 2.0\n")

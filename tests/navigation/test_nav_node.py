@@ -3,18 +3,24 @@
 from __future__ import annotations
 
 import asyncio
-import threading
+import contextlib
+import os
+import signal
+import sys
 from collections.abc import AsyncIterator
+from pathlib import Path
 from typing import Any
 
 import cv2
 import numpy as np
 import pytest
+from lidar_gate import GatedScan
 from nav_scenes import default_scene, lidar_directions, radar_noise_image, raycast
 
 from clients import RosbridgeClient
 from navigation.cli import main
 from navigation.config import NavigationConfig
+from navigation.lidar_worker import ProcessLidarWorker, ThreadLidarWorker
 from navigation.messages import header_msg
 from navigation.node import NavigationNode, serve
 from navigation.pointcloud import pointcloud2_msg
@@ -159,33 +165,26 @@ async def test_sensor_data_in_navigation_outputs_out(bridge_url, peer):
         await asyncio.wait_for(node_task, WAIT_S)
 
 
-class BlockingLidar(Processors):
-    """Processors whose LIDAR step waits for a gate: a LIDAR that has fallen far behind."""
-
-    def __init__(self, config: NavigationConfig) -> None:
-        super().__init__(config)
-        self.gate = threading.Event()
-        self.entered = threading.Event()
-
-    def lidar(self, msg: dict[str, Any]):
-        self.entered.set()
-        self.gate.wait(WAIT_S)
-        return super().lidar(msg)
-
-
-async def test_slow_lidar_neither_delays_camera_and_imu_nor_queues_scans(bridge_url, peer):
+@pytest.mark.parametrize("worker", [ProcessLidarWorker, ThreadLidarWorker])
+async def test_slow_lidar_neither_delays_camera_and_imu_nor_queues_scans(
+    bridge_url, peer, tmp_path, worker
+):
+    """The LIDAR step blocks where it really runs (the worker process, or the LIDAR thread)
+    while the camera and the IMU go on and newer scans replace older ones."""
     config = NavigationConfig()
-    processors = BlockingLidar(config)
+    entered, gate = tmp_path / "entered", tmp_path / "gate"
+    lidar = worker(config.lidar, GatedScan(entered, gate, WAIT_S))
+    processors = Processors(config, lidar_worker=lidar)
     stop = asyncio.Event()
     async with RosbridgeClient(bridge_url, connect_timeout=5.0, name="nav") as client:
         node = NavigationNode(client, config, processors)
         node_task = asyncio.create_task(node.run(stop))
         try:
-            await wait_until(lambda: "lidar" in node.subscriptions, "node subscriptions")
+            await wait_until(lambda: "imu" in node.subscriptions, "node subscriptions")
             await asyncio.sleep(0.3)
             scan = scan_msg(1)
             await peer.publish("/lidar/points", scan)
-            await wait_until(processors.entered.is_set, "the LIDAR step to start")
+            await wait_until(entered.exists, "the LIDAR step to start")
             for _ in range(3):  # scans arriving while the first one is still processed
                 await peer.publish("/lidar/points", scan)
             await peer.publish("/camera/image/compressed", camera_msg(2))
@@ -196,11 +195,12 @@ async def test_slow_lidar_neither_delays_camera_and_imu_nor_queues_scans(bridge_
             await wait_until(lambda: node.imu.snapshot().stamp_stats.count == 10, "imu")
             await wait_until(lambda: node.subscriptions["lidar"].received == 4, "scans")
             assert node.counters["lidar"].processed == 0
-            processors.gate.set()
+            gate.touch()
             await wait_until(lambda: node.counters["lidar"].processed == 2, "newest scan")
             assert node.counters["lidar"].skipped == 2
+            assert processors.lidar_steps.keys() == {"filter", "dbscan", "boxes"}
         finally:
-            processors.gate.set()
+            gate.touch()
             stop.set()
             await asyncio.wait_for(node_task, WAIT_S)
 
@@ -212,14 +212,43 @@ def test_cli_names_a_bad_config(tmp_path, caplog):
     assert "epsilon" in caplog.text
 
 
-async def test_python_m_navigation_runs_and_stops_on_sigterm(bridge_url, peer):
-    import signal
-    import sys
+def descendants(pid: int) -> set[int]:
+    """Process ids below ``pid`` (Linux /proc), children first."""
+    found: set[int] = set()
+    for task in Path(f"/proc/{pid}/task").glob("*"):
+        with contextlib.suppress(OSError):
+            for child in map(int, (task / "children").read_text().split()):
+                found |= {child} | descendants(child)
+    return found
 
+
+def alive(pid: int) -> bool:
+    """Running or sleeping, not gone and not a zombie waiting for its parent."""
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
+    except OSError:
+        return False
+
+
+@pytest.mark.parametrize(
+    ("stop_signal", "to_group", "exit_code"),
+    [
+        (signal.SIGTERM, False, 0),  # docker stop, the supervisor
+        (signal.SIGINT, True, 0),  # Ctrl-C: the terminal signals the whole process group
+        (signal.SIGKILL, False, -signal.SIGKILL),  # no clean-up at all in the parent
+    ],
+)
+async def test_python_m_navigation_leaves_no_worker_process_behind(
+    bridge_url, peer, stop_signal, to_group, exit_code
+):
+    """`python -m navigation` exits 0 on SIGTERM and Ctrl-C; whichever way it ends, its
+    LIDAR worker process ends too."""
     diagnostics = await peer.subscribe("/nav/diagnostics", "diagnostic_msgs/msg/DiagnosticArray")
     process = await asyncio.create_subprocess_exec(
-        sys.executable, "-m", "navigation", "--bridge", bridge_url, "--log-level", "WARNING"
+        sys.executable, "-m", "navigation", "--bridge", bridge_url, "--log-level", "WARNING",
+        start_new_session=True,
     )
+    workers: set[int] = set()
     try:
         msg = await first(diagnostics)
         names = [status["name"] for status in msg["status"]]
@@ -229,6 +258,12 @@ async def test_python_m_navigation_runs_and_stops_on_sigterm(bridge_url, peer):
             "navigation/radar",
             "navigation/camera",
         ]
+        await wait_until(lambda: descendants(process.pid), "the LIDAR worker process")
+        workers = descendants(process.pid)
     finally:
-        process.send_signal(signal.SIGTERM)
-        assert await asyncio.wait_for(process.wait(), WAIT_S) == 0
+        if to_group:
+            os.killpg(process.pid, stop_signal)
+        else:
+            process.send_signal(stop_signal)
+        assert await asyncio.wait_for(process.wait(), WAIT_S) == exit_code
+        await wait_until(lambda: not any(map(alive, workers)), "the worker processes to exit")
