@@ -13,10 +13,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
-import gc
 import logging
-import os
-import threading
 import time
 from collections.abc import Awaitable, Callable
 from concurrent.futures import ThreadPoolExecutor
@@ -34,23 +31,11 @@ from navigation.processors import (
     Outputs,
     Processors,
 )
+from schemas.process_tuning import background_priority, freeze_startup_heap
 from schemas.tracing import header_stamp_ns
 
 log = logging.getLogger(__name__)
 
-
-# Heavy sensor work runs at a lower CPU priority than the event loop that carries the small
-# messages: on 2 cores a scan's clustering occupies both, and an IMU sample must not wait a
-# scheduler slice behind it (DESIGN §4). Threads these workers start (scikit-learn's and numpy's)
-# inherit the value. 5 leaves them ~1/3 of a contended core. Measured with `riverbridge
-# report` on an idle 2-core machine: LIDAR CBOR transport p99 24 -> 15 ms, IMU p99 15 -> 9 ms.
-BACKGROUND_NICE = 5
-
-
-def background_priority() -> None:
-    """Thread initializer: lower this thread's scheduling priority (Linux; no-op elsewhere)."""
-    with contextlib.suppress(OSError, AttributeError):
-        os.setpriority(os.PRIO_PROCESS, threading.get_native_id(), BACKGROUND_NICE)
 
 SENSOR_INPUTS = {
     "lidar": ("/lidar/points", "sensor_msgs/msg/PointCloud2"),
@@ -192,19 +177,6 @@ async def _every(period_s: float, action: Callable[[], Awaitable[None]]) -> None
             await action()
         except Exception:
             log.exception("periodic %s failed", getattr(action, "__name__", action))
-
-
-def freeze_startup_heap() -> None:
-    """Exempt every object alive now (modules, classes, type registries: ~120k after the
-    imports of numpy, scikit-learn, OpenCV, rosbags, pydantic) from garbage collection.
-
-    A full collection traverses all tracked objects while holding the GIL; over the start-up
-    heap that took 66-72 ms here, and each one stalled the event loop and the IMU samples
-    queued on it (measured with `riverbridge report`: IMU bridge -> navigation hop max 72 ms,
-    coinciding with a gen2 collection). Long-lived start-up objects never become garbage.
-    """
-    gc.collect()
-    gc.freeze()
 
 
 async def serve(

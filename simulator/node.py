@@ -14,9 +14,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import logging
-import os
 import statistics
-import threading
 import time
 from collections import deque
 from collections.abc import Awaitable, Callable
@@ -26,6 +24,7 @@ from typing import Any
 from clients import RosbridgeClient
 from clients.protocol import Encoding
 from clients.tracing import Tracer, telemetry
+from schemas.process_tuning import background_priority, freeze_startup_heap
 from simulator.camera import OPTICAL_TO_BODY, Camera
 from simulator.config import MountConfig, SimConfig
 from simulator.dynamics import Command, StepResult, VesselDynamics, VesselState
@@ -39,19 +38,6 @@ from simulator.scene import Scene, build_scene
 
 log = logging.getLogger(__name__)
 
-
-# Heavy sensor work runs at a lower CPU priority than the event loop that carries the small
-# messages: on 2 cores a scan's ray cast occupies both, and an IMU sample must not wait a
-# scheduler slice behind it (DESIGN §4). Threads these workers start (Embree's ray-casting pool)
-# inherit the value. 5 leaves them ~1/3 of a contended core. Measured with `riverbridge
-# report` on an idle 2-core machine: LIDAR CBOR transport p99 24 -> 15 ms, IMU p99 15 -> 9 ms.
-BACKGROUND_NICE = 5
-
-
-def background_priority() -> None:
-    """Thread initializer: lower this thread's scheduling priority (Linux; no-op elsewhere)."""
-    with contextlib.suppress(OSError, AttributeError):
-        os.setpriority(os.PRIO_PROCESS, threading.get_native_id(), BACKGROUND_NICE)
 
 TOPICS = {
     "lidar": ("/lidar/points", "sensor_msgs/msg/PointCloud2"),
@@ -288,5 +274,6 @@ async def serve(url: str, cfg: SimConfig, stop: asyncio.Event, *, encoding: Enco
                                connect_timeout=connect_timeout_s, tracer=tracer) as client:
         log.info("simulator connected to %s (%s); %d triangles", url, encoding,
                  scene.triangle_count)
+        freeze_startup_heap()  # the scene's meshes included: its arrays are never garbage
         async with telemetry(client, tracer):
             await SimulatorNode(client, cfg, scene, tracer=tracer).run(stop)
