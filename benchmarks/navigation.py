@@ -55,6 +55,7 @@ from navigation.node import SENSOR_INPUTS, NavigationNode  # noqa: E402
 from navigation.pointcloud import pointcloud2_msg, xyzi_view  # noqa: E402
 from navigation.processors import OUTPUT_TYPES, TOPIC_BOXES, Processors  # noqa: E402
 from navigation.radar import PolarGeometry, detect, detection_array_msg, radar_power  # noqa: E402
+from schemas.process_tuning import single_threaded_blas  # noqa: E402
 
 log = logging.getLogger("benchmarks.navigation")
 
@@ -430,6 +431,7 @@ def main(argv: list[str] | None = None) -> int:
                         help="run only the sustained 2 Hz run")
     args = parser.parse_args(argv)
     logging.basicConfig(level=logging.WARNING, format="%(levelname)s %(name)s: %(message)s")
+    single_threaded_blas()  # as in the navigation process
     if args.only_sustained:
         run_sustained(args.sustained_scans)
         return 0

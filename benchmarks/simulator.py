@@ -19,7 +19,8 @@ Then the whole simulator runs for `--rtf-seconds` (default 30) with every sensor
 configured rate: the real `SimulatorNode` against a real `python -m bridge` child process,
 with one listener subscribed to every topic. It reports the real-time factor (simulated
 physics time / wall time; target 1.00 +- 0.01) and per sensor the configured, generated and
-received rates. `--quick` runs 5 repeats and a 5 s real-time run.
+received rates. `--quick` runs 5 repeats and a 5 s real-time run. OpenBLAS is limited to one
+thread as in the simulator process; `--multithreaded-blas` leaves its default, for comparison.
 """
 
 from __future__ import annotations
@@ -43,6 +44,7 @@ sys.path[:0] = [str(ROOT), str(ROOT / "tests" / "simulator")]
 from sim_processes import header_stamp_s, running_bridge  # noqa: E402
 
 from clients import RosbridgeClient  # noqa: E402
+from schemas.process_tuning import single_threaded_blas  # noqa: E402
 from simulator.camera import Camera  # noqa: E402
 from simulator.config import SimConfig  # noqa: E402
 from simulator.dynamics import Command, VesselDynamics, VesselState  # noqa: E402
@@ -288,7 +290,12 @@ def main(argv: list[str] | None = None) -> int:
                         help="length of the real-time run with every sensor on (0: skip it)")
     parser.add_argument("--quick", action="store_true",
                         help="a short run: 5 repeats and a 5 s real-time run")
+    parser.add_argument("--multithreaded-blas", action="store_true",
+                        help="leave OpenBLAS its default threads (every riverbridge process "
+                             "limits it to one; this shows what that saves)")
     args = parser.parse_args(argv)
+    if not args.multithreaded_blas:
+        single_threaded_blas()
     if args.tuned_malloc and not all(os.environ.get(k) == v for k, v in TUNED_MALLOC.items()):
         os.execve(sys.executable, [sys.executable, *sys.argv], {**os.environ, **TUNED_MALLOC})
     if args.quick:

@@ -31,6 +31,7 @@ import numpy as np
 from navigation.boxes import Boxes, refine_boxes
 from navigation.config import LidarConfig
 from navigation.lidar import cluster_obstacles, obstacle_points
+from schemas.process_tuning import single_threaded_blas
 
 log = logging.getLogger(__name__)
 
@@ -207,10 +208,12 @@ def lidar_worker_for(config: LidarConfig) -> LidarWorker:
 
 def _init_worker(parent_pid: int) -> None:
     """Worker process set-up: background priority; SIGINT (a terminal's Ctrl-C reaches the
-    whole process group) is the parent's to handle, which then stops this worker cleanly."""
+    whole process group) is the parent's to handle, which then stops this worker cleanly;
+    OpenBLAS stays on one thread as in every riverbridge process."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     with contextlib.suppress(OSError, AttributeError):
         os.setpriority(os.PRIO_PROCESS, 0, WORKER_NICE)
+    single_threaded_blas()
     _exit_with(parent_pid)
 
 

@@ -31,7 +31,11 @@ from navigation.processors import (
     Outputs,
     Processors,
 )
-from schemas.process_tuning import background_priority, freeze_startup_heap
+from schemas.process_tuning import (
+    background_priority,
+    freeze_startup_heap,
+    single_threaded_blas,
+)
 from schemas.tracing import header_stamp_ns
 
 log = logging.getLogger(__name__)
@@ -186,6 +190,7 @@ async def serve(
     tracer = Tracer("navigation")
     async with RosbridgeClient(url, encoding=encoding, name="navigation", tracer=tracer) as client:
         log.info("navigation connected to %s (%s)", url, encoding)
+        single_threaded_blas()
         freeze_startup_heap()
         async with telemetry(client, tracer):
             await NavigationNode(client, config, tracer=tracer).run(stop)

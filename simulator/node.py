@@ -24,7 +24,11 @@ from typing import Any
 from clients import RosbridgeClient
 from clients.protocol import Encoding
 from clients.tracing import Tracer, telemetry
-from schemas.process_tuning import background_priority, freeze_startup_heap
+from schemas.process_tuning import (
+    background_priority,
+    freeze_startup_heap,
+    single_threaded_blas,
+)
 from simulator.camera import OPTICAL_TO_BODY, Camera
 from simulator.config import MountConfig, SimConfig
 from simulator.dynamics import Command, StepResult, VesselDynamics, VesselState
@@ -274,6 +278,7 @@ async def serve(url: str, cfg: SimConfig, stop: asyncio.Event, *, encoding: Enco
                                connect_timeout=connect_timeout_s, tracer=tracer) as client:
         log.info("simulator connected to %s (%s); %d triangles", url, encoding,
                  scene.triangle_count)
+        single_threaded_blas()
         freeze_startup_heap()  # the scene's meshes included: its arrays are never garbage
         async with telemetry(client, tracer):
             await SimulatorNode(client, cfg, scene, tracer=tracer).run(stop)

@@ -3,10 +3,16 @@
 from __future__ import annotations
 
 import gc
+import json
 import os
+import subprocess
+import sys
 import threading
+from pathlib import Path
 
 from schemas.process_tuning import BACKGROUND_NICE, background_priority, freeze_startup_heap
+
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def test_freezing_the_start_up_heap_takes_it_out_of_collections() -> None:
@@ -32,3 +38,22 @@ def test_background_threads_run_at_a_lower_priority() -> None:
     assert seen["after"] == BACKGROUND_NICE
     assert os.getpriority(os.PRIO_PROCESS, threading.get_native_id()) == seen["before"], (
         "only the calling thread changes")
+
+
+def test_openblas_is_kept_to_one_thread_for_the_whole_process() -> None:
+    # A child process: the limit is process-wide and would leak into the other tests.
+    probe = (
+        "import json, numpy\n"
+        "from threadpoolctl import threadpool_info\n"
+        "from schemas.process_tuning import single_threaded_blas\n"
+        "single_threaded_blas()\n"
+        "a = numpy.ones((300, 3), numpy.float32) @ numpy.eye(3, dtype=numpy.float32)\n"
+        "print(json.dumps([p['num_threads'] for p in threadpool_info()"
+        " if p['user_api'] == 'blas']))\n"
+    )
+    env = {**os.environ, "OPENBLAS_NUM_THREADS": "2"}  # what a 2-core machine starts with
+    out = subprocess.run([sys.executable, "-c", probe], cwd=ROOT, env=env, check=True,
+                         capture_output=True, text=True, timeout=60).stdout
+    blas_threads = json.loads(out)
+    assert blas_threads, "numpy's OpenBLAS was found"
+    assert set(blas_threads) == {1}
