@@ -13,7 +13,7 @@ from pydantic import ValidationError
 
 from bridge.config import MIB, BridgeConfig
 from bridge.server import run_bridge
-from schemas.process_tuning import freeze_startup_heap, single_threaded_blas
+from schemas.process_tuning import freeze_startup_heap, tune_process
 
 logger = logging.getLogger("bridge.cli")
 
@@ -94,7 +94,7 @@ async def serve_until_signalled(config: BridgeConfig) -> None:
     try:
         async with run_bridge(config) as running:
             logger.info("listening on ws://%s:%d", config.host, running.port)
-            single_threaded_blas()
+            tune_process()
             freeze_startup_heap()
             await stop.wait()
             logger.info("shutting down")

@@ -35,9 +35,10 @@ class BridgeConfig(BaseModel):
     # Messages of one topic waiting for one client; past it that topic's oldest is dropped
     # (rosbridge 2026 write_queue_size idea, #1290): a few frames of the fastest sensor.
     send_queue: int = Field(default=16, gt=0)
-    # Frames whose payload exceeds this many bytes are encoded in the worker pool, off the loop
-    # (a 4 MB JSON+base64 encode is ~10-30 ms, performance-measurements §2(c)).
-    offload_threshold_bytes: int = Field(default=256 * 1024, gt=0)
+    # Frames from this many bytes on are decoded, validated and encoded in the worker pool, off
+    # the loop: a 4 MB JSON+base64 encode is ~10-30 ms (performance-measurements §2(c)), and
+    # validating a 40 kB array of 400 nested messages ~6 ms on a busy core.
+    offload_threshold_bytes: int = Field(default=4 * 1024, gt=0)
     # Extra folders of .msg/.srv/.action definitions registered at start-up.
     interface_dirs: tuple[Path, ...] = ()
     # ROS distribution reported by /rosapi/get_ros_version.

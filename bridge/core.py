@@ -16,10 +16,10 @@ from bridge.config import BridgeConfig
 from bridge.context import BridgeState, Context
 from bridge.effects import Effect
 from bridge.errors import BridgeError, InvalidNameError
-from bridge.inbound import decode_frame
+from bridge.inbound import PreparedMessage, decode_frame
 from bridge.names import absolute_name
 from bridge.ops import Handler, actions, fragments, levels, merge_tables, services, topics
-from bridge.outgoing import TopicMessage
+from bridge.outgoing import TopicMessage, payload_size
 from bridge.rosapi import ROSAPI_SERVICES
 from bridge.session import ClientSession
 from bridge.sinks import MessageSink
@@ -28,6 +28,7 @@ from schemas.message import normalize
 from schemas.ops import OpError, parse_op
 from schemas.registry import TypeRegistry
 from schemas.specs import MessageSpec
+from schemas.tracing import cdr_size, header_stamp_ns
 
 logger = logging.getLogger("bridge.core")
 
@@ -87,18 +88,30 @@ class BridgeCore:
     def prepare(self, data: bytes | str, now_ns: int) -> Any:
         """Decode a frame and pre-convert a publish's message; meant for a worker thread.
 
-        The costly parts of a large publish (JSON parse, base64 decode of byte arrays) happen
-        here, off the event loop. It only reads the graph (the topic's type); the handler
-        validates the result again on the loop, which is cheap for canonical input. Raises
-        SchemaError for undecodable frames; hand the result to `receive_decoded`.
+        Everything a large publish costs in proportion to its size happens here, off the event
+        loop: the JSON or CBOR parse, base64 decode of byte arrays, validation of every nested
+        message, the size figures. It only reads the graph (the topic's type); the handler
+        takes the `PreparedMessage` as it is when the type is unchanged. Raises SchemaError for
+        undecodable frames; hand the result to `receive_decoded`.
         """
         message = decode_frame(data)
         if isinstance(message, dict) and message.get("op") == "publish":
             spec = self._presumed_spec(message)
             if spec is not None and isinstance(message.get("msg"), dict):
                 with contextlib.suppress(SchemaError):
-                    message = {**message, "msg": normalize(spec, message["msg"], now_ns=now_ns)}
+                    msg = normalize(spec, message["msg"], now_ns=now_ns)
+                    message = {**message, "msg": PreparedMessage(
+                        msg, spec, max(len(data), payload_size(msg)), self._cdr_bytes(spec, msg))}
         return message
+
+    def _cdr_bytes(self, spec: MessageSpec, msg: dict[str, Any]) -> int | None:
+        """The serialized size tracing reports for stamped messages (None: not needed)."""
+        if header_stamp_ns(msg) is None:
+            return None
+        try:
+            return cdr_size(self.state.registry, spec.name, msg)
+        except (SchemaError, KeyError, TypeError, ValueError, AttributeError):
+            return None
 
     def _presumed_spec(self, message: dict[str, Any]) -> MessageSpec | None:
         topic = message.get("topic")

@@ -57,21 +57,26 @@ class TopicMessage:
 
     `stamp_ns` is the bridge wall-clock time the message entered the graph; it fills the
     `secs`/`nsecs` of cbor-raw frames. `cdr` may be given by a middleware source that already
-    holds the serialized form (then cbor-raw needs no encode).
+    holds the serialized form (then cbor-raw needs no encode). `size_hint` (how costly an
+    encode will be) and `cdr_bytes` (the serialized size, for tracing) may come precomputed
+    from a worker thread; otherwise the first is derived here and the second left to whoever
+    needs it.
     """
 
-    __slots__ = ("_frames", "_lock", "cdr", "msg", "registry", "size_hint", "stamp_ns",
-                 "topic", "type_name")
+    __slots__ = ("_frames", "_lock", "cdr", "cdr_bytes", "msg", "registry", "size_hint",
+                 "stamp_ns", "topic", "type_name")
 
     def __init__(self, topic: str, type_name: str, msg: dict[str, Any], stamp_ns: int,
-                 registry: TypeRegistry, cdr: bytes | None = None) -> None:
+                 registry: TypeRegistry, cdr: bytes | None = None, *,
+                 size_hint: int | None = None, cdr_bytes: int | None = None) -> None:
         self.topic = topic
         self.type_name = type_name
         self.msg = msg
         self.stamp_ns = stamp_ns
         self.registry = registry
         self.cdr = cdr
-        self.size_hint = payload_size(msg)
+        self.cdr_bytes = cdr_bytes
+        self.size_hint = payload_size(msg) if size_hint is None else size_hint
         self._frames: dict[tuple[str, str], WireFrame] = {}
         self._lock = threading.RLock()  # png re-enters for the JSON frame
 

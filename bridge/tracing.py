@@ -75,10 +75,12 @@ class BridgeTracer:
         stamp_ns = header_stamp_ns(message.msg)
         if stamp_ns is None or not is_traced(message.topic):
             return
-        try:
-            payload_bytes = cdr_size(message.registry, message.type_name, message.msg)
-        except (SchemaError, KeyError, TypeError, ValueError, AttributeError):
-            payload_bytes = 0
+        payload_bytes = message.cdr_bytes
+        if payload_bytes is None:
+            try:
+                payload_bytes = cdr_size(message.registry, message.type_name, message.msg)
+            except (SchemaError, KeyError, TypeError, ValueError, AttributeError):
+                payload_bytes = 0
         traffic.payload_bytes_in += payload_bytes
         self.spans.record(message.topic, stamp_ns, "bridge_in", arrived_ns, time.time_ns(),
                           payload_bytes, wire_bytes)

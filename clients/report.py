@@ -16,6 +16,8 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from schemas.tracing import header_stamp_ns
+
 # Stages in path order: recorded spans plus the two hops between processes.
 STAGES = ("generate", "publish_wait", "encode", "send", "pub_to_bridge", "bridge_in", "fanout",
           "bridge_to_sub", "decode", "wait", "process")
@@ -245,10 +247,17 @@ def stage_values(items: Iterable[Journey]) -> dict[str, list[float]]:
 
 
 def process_summary(stats: Iterable[Mapping[str, Any]]) -> dict[str, dict[str, Any]]:
-    """Per process (ProcessStats messages): mean and max CPU %, max RSS, last counters."""
+    """Per process (ProcessStats messages): mean and max CPU %, max RSS, last counters.
+
+    A process with several connections announces each sample on all of them; it counts once.
+    """
     by_process: dict[str, list[Mapping[str, Any]]] = defaultdict(list)
+    seen: set[tuple[str, Any]] = set()
     for message in stats:
-        by_process[message["process"]].append(message)
+        key = (message["process"], header_stamp_ns(message))
+        if key[1] is None or key not in seen:
+            seen.add(key)
+            by_process[message["process"]].append(message)
     out = {}
     for process, items in sorted(by_process.items()):
         cpu = [float(m["cpu_percent"]) for m in items]

@@ -16,7 +16,7 @@ import contextlib
 import logging
 import time
 from collections import OrderedDict
-from collections.abc import AsyncIterator, Callable
+from collections.abc import AsyncIterator, Callable, Sequence
 from typing import TYPE_CHECKING, Any
 
 from clients.events import Received
@@ -116,21 +116,29 @@ class Tracer:
 @contextlib.asynccontextmanager
 async def telemetry(client: RosbridgeClient, tracer: Tracer,
                     period_s: float = PUBLISH_PERIOD_S,
-                    dropped: Callable[[], int] | None = None) -> AsyncIterator[None]:
+                    dropped: Callable[[], int] | None = None,
+                    also: Sequence[RosbridgeClient] = ()) -> AsyncIterator[None]:
     """Publish ``tracer``'s batches and stats through ``client`` every ``period_s`` meanwhile.
 
-    ``dropped`` reports the process's dropped-message count (default: the client's own).
-    The last batch is published when the block ends.
+    ``also``: the process's other connections. Each announces the same ProcessStats, because
+    the bridge names a connection's fan-out spans by the process that announced itself on it
+    (the report counts each stats stamp once). ``dropped`` reports the process's
+    dropped-message count (default: all its clients' own). The last batch is published when
+    the block ends.
     """
-    count_dropped = dropped or (lambda: client.dropped)
+    clients = (client, *also)
+    count_dropped = dropped or (lambda: sum(c.dropped for c in clients))
     await client.advertise(TRACE_TOPIC, TRACE_TYPE)
-    await client.advertise(STATS_TOPIC, STATS_TYPE)
+    for each in clients:
+        await each.advertise(STATS_TOPIC, STATS_TYPE)
 
     async def publish_once() -> None:
         batch = tracer.batch_msg()
         if batch is not None:
             await client.publish(TRACE_TOPIC, batch)
-        await client.publish(STATS_TOPIC, tracer.stats_msg(time.time_ns(), count_dropped()))
+        stats = tracer.stats_msg(time.time_ns(), count_dropped())
+        for each in clients:
+            await each.publish(STATS_TOPIC, stats)
 
     async def loop() -> None:
         while True:

@@ -11,7 +11,6 @@ costs ~5 ms of LIDAR latency (scan -> boxes) on a 2-core machine.
 
 from __future__ import annotations
 
-import contextlib
 import logging
 import multiprocessing
 import os
@@ -31,16 +30,13 @@ import numpy as np
 from navigation.boxes import Boxes, refine_boxes
 from navigation.config import LidarConfig
 from navigation.lidar import cluster_obstacles, obstacle_points
-from schemas.process_tuning import single_threaded_blas
+from schemas.process_tuning import background_priority, tune_process
 
 log = logging.getLogger(__name__)
 
 # Sub-step name -> (start_ns, end_ns) wall clock, for stage tracing (docs/tracing.md)
 StepTimes = dict[str, tuple[int, int]]
 POINT_BYTES = 16  # (x, y, z, intensity) float32
-# Same value as the node's worker threads: on 2 cores the clustering must leave the event
-# loops (navigation's, the bridge's, the simulator's) the larger share of a contended core.
-WORKER_NICE = 5
 PARENT_POLL_S = 1.0  # where pidfd is missing: how soon an orphaned worker notices
 START_TIMEOUT_S = 120.0  # importing numpy + scikit-learn on a loaded 2-core machine
 
@@ -207,13 +203,13 @@ def lidar_worker_for(config: LidarConfig) -> LidarWorker:
 
 
 def _init_worker(parent_pid: int) -> None:
-    """Worker process set-up: background priority; SIGINT (a terminal's Ctrl-C reaches the
-    whole process group) is the parent's to handle, which then stops this worker cleanly;
-    OpenBLAS stays on one thread as in every riverbridge process."""
+    """Worker process set-up: background priority like the node's worker threads (on 2 cores
+    the clustering must leave the event loops of all three processes a core at once); SIGINT
+    (a terminal's Ctrl-C reaches the whole process group) is the parent's to handle, which then
+    stops this worker cleanly; the start-up settings of every riverbridge process."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
-    with contextlib.suppress(OSError, AttributeError):
-        os.setpriority(os.PRIO_PROCESS, 0, WORKER_NICE)
-    single_threaded_blas()
+    background_priority()
+    tune_process()
     _exit_with(parent_pid)
 
 

@@ -34,7 +34,7 @@ from navigation.processors import (
 from schemas.process_tuning import (
     background_priority,
     freeze_startup_heap,
-    single_threaded_blas,
+    tune_process,
 )
 from schemas.tracing import header_stamp_ns
 
@@ -52,7 +52,11 @@ DIAGNOSTICS_PERIOD_S = 1.0
 
 
 class NavigationNode:
-    """Runs the processors against one connected client until ``stop`` is set."""
+    """Runs the processors against connected clients until ``stop`` is set.
+
+    ``client`` carries the sensor data and every output; ``realtime`` (default: ``client``)
+    the IMU, which on its own connection never queues on the wire behind a 4 MB scan.
+    """
 
     def __init__(
         self,
@@ -60,8 +64,10 @@ class NavigationNode:
         config: NavigationConfig,
         processors: Processors | None = None,
         tracer: Tracer | None = None,
+        realtime: RosbridgeClient | None = None,
     ) -> None:
         self._client = client
+        self._realtime = realtime or client
         self._tracer = tracer
         self._config = config
         self.processors = processors or Processors(config)
@@ -104,7 +110,7 @@ class NavigationNode:
         for name, (topic, type_name) in SENSOR_INPUTS.items():
             self.subscriptions[name] = await self._client.subscribe(topic, type_name, maxsize=1)
         imu_topic, imu_type = IMU_INPUT
-        self.subscriptions["imu"] = await self._client.subscribe(
+        self.subscriptions["imu"] = await self._realtime.subscribe(
             imu_topic, imu_type, maxsize=IMU_QUEUE
         )
         map_period_s = 1.0 / self._config.fusion.publish_rate_hz
@@ -188,9 +194,11 @@ async def serve(
 ) -> None:
     """Connect to the bridge at ``url`` and run the navigation node until ``stop``."""
     tracer = Tracer("navigation")
-    async with RosbridgeClient(url, encoding=encoding, name="navigation", tracer=tracer) as client:
-        log.info("navigation connected to %s (%s)", url, encoding)
-        single_threaded_blas()
+    async with (RosbridgeClient(url, encoding=encoding, name="navigation", tracer=tracer) as client,
+                RosbridgeClient(url, encoding=encoding, name="navigation-realtime",
+                                tracer=tracer) as realtime):
+        log.info("navigation connected to %s (%s, bulk and realtime connections)", url, encoding)
+        tune_process()
         freeze_startup_heap()
-        async with telemetry(client, tracer):
-            await NavigationNode(client, config, tracer=tracer).run(stop)
+        async with telemetry(client, tracer, also=[realtime]):
+            await NavigationNode(client, config, tracer=tracer, realtime=realtime).run(stop)

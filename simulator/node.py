@@ -6,7 +6,9 @@ truth odometry and the vessel transform. Each heavy sensor (LIDAR, radar, camera
 schedule and its own worker thread (plus its ray-casting threads; Embree, numpy and OpenCV
 release the GIL), so the IMU never waits behind a scan. A sensor that overruns its period skips
 the missed ticks instead of queueing them. All sensor topics are advertised `latest_only`, so a
-publish never blocks the schedule. Per-sensor generation times are logged periodically.
+publish never blocks the schedule. The small, frequent messages travel on a connection of their
+own, so they never queue on the wire behind a scan. Per-sensor generation times are logged
+periodically.
 """
 
 from __future__ import annotations
@@ -27,7 +29,7 @@ from clients.tracing import Tracer, telemetry
 from schemas.process_tuning import (
     background_priority,
     freeze_startup_heap,
-    single_threaded_blas,
+    tune_process,
 )
 from simulator.camera import OPTICAL_TO_BODY, Camera
 from simulator.config import MountConfig, SimConfig
@@ -97,16 +99,22 @@ def static_transforms(cfg: SimConfig, stamp_ns: int) -> dict:
 
 
 class SimulatorNode:
-    """Runs the simulation against one connected client until `stop` is set.
+    """Runs the simulation against connected clients until `stop` is set.
 
+    client : carries the bulk sensor data (LIDAR, radar, camera) and /tf_static.
+    realtime : carries the small, frequent messages (IMU, odometry, tf, GNSS, commands); by
+        default `client`. On its own connection an IMU sample never waits on the wire behind
+        a 4 MB scan (one TCP stream delivers in order: up to 5 ms per hop here).
     clock_ns : wall clock for capture stamps (injectable for tests).
     tracer : records each sensor message's `generate` stage (capture → message ready).
     """
 
     def __init__(self, client: RosbridgeClient, cfg: SimConfig, scene: Scene, *,
+                 realtime: RosbridgeClient | None = None,
                  clock_ns: Callable[[], int] = time.time_ns,
                  tracer: Tracer | None = None) -> None:
         self._client = client
+        self._realtime = realtime or client
         self._tracer = tracer
         self.cfg = cfg
         self.scene = scene
@@ -128,11 +136,11 @@ class SimulatorNode:
 
     async def run(self, stop: asyncio.Event) -> None:
         """Advertise, subscribe to commands, run every schedule until `stop`, then clean up."""
-        for topic, type_name in TOPICS.values():
-            await self._client.advertise(topic, type_name, latest_only=True)
+        for name, (topic, type_name) in TOPICS.items():
+            await self._client_for(name).advertise(topic, type_name, latest_only=True)
         await self._client.advertise(*TF_STATIC, latch=True)
         await self._client.publish(TF_STATIC[0], static_transforms(self.cfg, self._clock_ns()))
-        commands = await self._client.subscribe(*COMMAND, maxsize=1)
+        commands = await self._realtime.subscribe(*COMMAND, maxsize=1)
         generators = {"lidar": self._lidar, "radar": self._radar, "camera": self._camera}
         rates = {"lidar": self.cfg.lidar.rate_hz, "radar": self.cfg.radar.rate_hz,
                  "camera": self.cfg.camera.rate_hz}
@@ -155,6 +163,9 @@ class SimulatorNode:
                 executor.shutdown(wait=True, cancel_futures=True)
             for sensor in (self.lidar, self.radar, self.camera):
                 sensor.close()
+
+    def _client_for(self, sensor: str) -> RosbridgeClient:
+        return self._client if sensor in HEAVY_SENSORS else self._realtime
 
     async def _follow(self, commands) -> None:
         """Keep the newest `/cmd_wrench` as the actuator command."""
@@ -200,10 +211,10 @@ class SimulatorNode:
         state, water_m = result.state, self.scene.water_level_m
         imu_msg = self.imu.message(self.imu.measure(result), stamp_ns)
         self._generated(TOPICS["imu"][0], stamp_ns)
-        await self._client.publish(TOPICS["imu"][0], imu_msg)
-        await self._client.publish(TOPICS["odom"][0], odometry(
+        await self._realtime.publish(TOPICS["imu"][0], imu_msg)
+        await self._realtime.publish(TOPICS["odom"][0], odometry(
             state.pose, water_m, (state.u_mps, state.v_mps), state.r_radps, stamp_ns))
-        await self._client.publish(TOPICS["tf"][0], vessel_tf(state.pose, water_m, stamp_ns))
+        await self._realtime.publish(TOPICS["tf"][0], vessel_tf(state.pose, water_m, stamp_ns))
 
     def _sensor_tick(self, name: str, work: Callable[[Any, int], dict]):
         """A tick that captures pose and stamp now, generates on the sensor's thread, publishes."""
@@ -236,7 +247,7 @@ class SimulatorNode:
 
     async def _publish_gnss(self) -> None:
         fix = self.gnss.fix(self.state.pose, self.scene.water_level_m)
-        await self._client.publish(TOPICS["gnss"][0], self.gnss.message(fix, self._clock_ns()))
+        await self._realtime.publish(TOPICS["gnss"][0], self.gnss.message(fix, self._clock_ns()))
 
     async def _log_timings(self) -> None:
         log.info("generation times: %s; physics lateness %s; collisions %d", "; ".join(
@@ -274,11 +285,13 @@ async def serve(url: str, cfg: SimConfig, stop: asyncio.Event, *, encoding: Enco
     if scene is None:
         scene = await asyncio.to_thread(build_scene, cfg.scene, seed=cfg.seed)
     tracer = Tracer("simulator")
-    async with RosbridgeClient(url, encoding=encoding, name="simulator",
-                               connect_timeout=connect_timeout_s, tracer=tracer) as client:
-        log.info("simulator connected to %s (%s); %d triangles", url, encoding,
-                 scene.triangle_count)
-        single_threaded_blas()
+    async with (RosbridgeClient(url, encoding=encoding, name="simulator",
+                                connect_timeout=connect_timeout_s, tracer=tracer) as client,
+                RosbridgeClient(url, encoding=encoding, name="simulator-realtime",
+                                connect_timeout=connect_timeout_s, tracer=tracer) as realtime):
+        log.info("simulator connected to %s (%s, bulk and realtime connections); %d triangles",
+                 url, encoding, scene.triangle_count)
+        tune_process()
         freeze_startup_heap()  # the scene's meshes included: its arrays are never garbage
-        async with telemetry(client, tracer):
-            await SimulatorNode(client, cfg, scene, tracer=tracer).run(stop)
+        async with telemetry(client, tracer, also=[realtime]):
+            await SimulatorNode(client, cfg, scene, realtime=realtime, tracer=tracer).run(stop)

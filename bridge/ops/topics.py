@@ -6,6 +6,7 @@ from typing import Any
 
 from bridge.context import Context
 from bridge.errors import GraphConflictError, OpFailure
+from bridge.inbound import PreparedMessage
 from bridge.names import absolute_name, allowed
 from bridge.outgoing import TopicMessage
 from bridge.session import ClientSession
@@ -73,11 +74,17 @@ def handle_publish(ctx: Context, session: ClientSession, op: Any) -> None:
     elif op.latch:
         entry.latching.add(session.node)
     spec = ctx.state.registry.message(entry.type_name)
-    try:
-        msg = normalize(spec, {} if op.msg is None else op.msg, now_ns=ctx.now_ns)
-    except SchemaError as exc:
-        raise OpFailure(f"message dropped: {exc}") from exc
-    message = TopicMessage(name, entry.type_name, msg, ctx.now_ns, ctx.state.registry)
+    prepared = op.msg if isinstance(op.msg, PreparedMessage) and op.msg.spec is spec else None
+    if prepared is not None:
+        message = TopicMessage(name, entry.type_name, dict(prepared), ctx.now_ns,
+                               ctx.state.registry, size_hint=prepared.size_hint,
+                               cdr_bytes=prepared.cdr_bytes)
+    else:
+        try:
+            msg = normalize(spec, {} if op.msg is None else op.msg, now_ns=ctx.now_ns)
+        except SchemaError as exc:
+            raise OpFailure(f"message dropped: {exc}") from exc
+        message = TopicMessage(name, entry.type_name, msg, ctx.now_ns, ctx.state.registry)
     if session.node in entry.latching:
         entry.latched = message
     ctx.publish(message, session.node)

@@ -292,6 +292,44 @@ def test_prepare_converts_large_publishes_off_loop_and_handle_revalidates(harnes
     assert harness.outbox(sub) == []
 
 
+def test_a_prepared_publish_is_not_validated_again_and_keeps_its_sizes(harness):
+    import json
+
+    from bridge.inbound import PreparedMessage
+    from schemas.tracing import cdr_size
+
+    pub = harness.connect()
+    advertise(harness, pub, topic="/fix", type_name="sensor_msgs/NavSatFix", latch=True)
+    frame = json.dumps({"op": "publish", "topic": "/fix", "latch": True, "msg": {
+        "header": {"stamp": {"sec": 3, "nanosec": 4}, "frame_id": "gnss"}, "latitude": 51.6}})
+    prepared = harness.core.prepare(frame, harness.now_ns)["msg"]
+    assert isinstance(prepared, PreparedMessage)
+    assert prepared.spec is harness.state.registry.message("sensor_msgs/msg/NavSatFix")
+    assert prepared.size_hint >= len(frame)
+    assert prepared.cdr_bytes == cdr_size(harness.state.registry, "sensor_msgs/msg/NavSatFix",
+                                          dict(prepared))
+    harness.receive_prepared(pub, frame)
+    latched = harness.state.graph.topics["/fix"].latched
+    assert type(latched.msg) is dict and latched.msg["latitude"] == 51.6
+    assert (latched.size_hint, latched.cdr_bytes) == (prepared.size_hint, prepared.cdr_bytes)
+
+
+def test_a_prepared_publish_is_validated_again_when_the_topic_changed_type(harness):
+    import json
+
+    pub, sub = harness.connect(), harness.connect()
+    advertise(harness, pub, topic="/t", type_name="std_msgs/String")
+    prepared = harness.core.prepare(
+        json.dumps({"op": "publish", "topic": "/t", "msg": {"data": "hello"}}), harness.now_ns)
+    harness.send(pub, {"op": "unadvertise", "topic": "/t"})
+    advertise(harness, pub, topic="/t", type_name="std_msgs/Int32")
+    harness.send(sub, {"op": "subscribe", "topic": "/t"})
+    harness._record(harness.core.receive_decoded(pub, prepared, harness.now_ns))
+    assert harness.outbox(sub) == [], "a String is no Int32"
+    publish(harness, pub, {"data": 7}, topic="/t")
+    assert [m["msg"] for m in harness.outbox(sub)] == [{"data": 7}]
+
+
 def test_topic_glob_gates_advertise_publish_and_subscribe(registry):
     harness = CoreHarness(registry, topics_glob=("/cam/*",))
     client = harness.connect()

@@ -160,6 +160,12 @@ async def test_sensor_data_in_navigation_outputs_out(bridge_url, peer):
         imu = {kv["key"]: kv["value"] for kv in diagnostics["status"][0]["values"]}
         assert float(imu["rate_hz"]) == pytest.approx(100.0, rel=0.01)
         assert imu["gaps"] == "0"
+        subscribers = {topic: set((await peer.call_service(
+            "/rosapi/subscribers", {"topic": topic}))["subscribers"])
+            for topic in ("/imu/data", "/lidar/points")}
+        # The IMU has a connection of its own: it never waits on the wire behind a scan.
+        assert len(subscribers["/imu/data"]) == len(subscribers["/lidar/points"]) == 1
+        assert subscribers["/imu/data"] != subscribers["/lidar/points"]
     finally:
         stop.set()
         await asyncio.wait_for(node_task, WAIT_S)

@@ -134,11 +134,14 @@ def test_loopback_counters_are_read_from_proc_net_dev_text():
 
 
 def test_process_and_network_summaries():
-    stats = [{"process": "bridge", "cpu_percent": c, "rss_bytes": r, "pid": 1, "host": "h",
+    stats = [{"header": {"stamp": {"sec": sec, "nanosec": 0}, "frame_id": ""},
+              "process": "bridge", "cpu_percent": c, "rss_bytes": r, "pid": 1, "host": "h",
               "messages_out": 1, "messages_in": 2, "bytes_out": 3, "bytes_in": 4,
-              "dropped": 0} for c, r in ((10.0, 100), (30.0, 300))]
-    bridge = process_summary(stats)["bridge"]
-    assert bridge["cpu_percent_mean"] == pytest.approx(20.0)
+              "dropped": 0} for sec, c, r in ((1, 10.0, 100), (2, 30.0, 300), (3, 50.0, 200))]
+    # A process with two connections announces its third sample on both.
+    bridge = process_summary([*stats, stats[2]])["bridge"]
+    assert bridge["samples"] == 3
+    assert bridge["cpu_percent_mean"] == pytest.approx(30.0)
     assert bridge["rss_bytes_max"] == 300
     topics = {"/a": {"payload_bytes": 1000, "wire_in_bytes": 1100, "rate_hz": 2.0}}
     network = network_summary(topics, loopback_bytes=44_000, duration_s=10.0)

@@ -10,7 +10,7 @@ import sys
 import threading
 from pathlib import Path
 
-from schemas.process_tuning import BACKGROUND_NICE, background_priority, freeze_startup_heap
+from schemas.process_tuning import background_priority, freeze_startup_heap
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -23,20 +23,26 @@ def test_freezing_the_start_up_heap_takes_it_out_of_collections() -> None:
         gc.unfreeze()
 
 
-def test_background_threads_run_at_a_lower_priority() -> None:
+def test_background_threads_run_only_on_idle_cores() -> None:
     seen: dict[str, int] = {}
 
     def worker() -> None:
-        before = os.getpriority(os.PRIO_PROCESS, threading.get_native_id())
+        thread_id = threading.get_native_id()
+        seen["before"] = os.sched_getscheduler(thread_id)
         background_priority()
-        seen["before"] = before
-        seen["after"] = os.getpriority(os.PRIO_PROCESS, threading.get_native_id())
+        seen["after"] = os.sched_getscheduler(thread_id)
+        child = threading.Thread(target=lambda: seen.setdefault(
+            "child", os.sched_getscheduler(threading.get_native_id())))
+        child.start()
+        child.join()
 
     thread = threading.Thread(target=worker)
     thread.start()
     thread.join()
-    assert seen["after"] == BACKGROUND_NICE
-    assert os.getpriority(os.PRIO_PROCESS, threading.get_native_id()) == seen["before"], (
+    assert seen["before"] == os.SCHED_OTHER
+    assert seen["after"] == os.SCHED_IDLE
+    assert seen["child"] == os.SCHED_IDLE, "threads a background thread starts inherit it"
+    assert os.sched_getscheduler(threading.get_native_id()) == os.SCHED_OTHER, (
         "only the calling thread changes")
 
 

@@ -57,9 +57,16 @@ async def test_every_topic_arrives_typed_and_stamped(bridge, registry, encoding)
             others = {name: await collect(subs[name], 1, timeout_s=10.0)
                       for name in ("lidar", "radar", "camera", "gnss", "odom", "tf")}
             tf_static = await collect(static, 1, timeout_s=5.0)
+            publishers = {topic: (await listener.call_service(
+                "/rosapi/publishers", {"topic": topic}))["publishers"]
+                for topic in (TOPICS["lidar"][0], TOPICS["imu"][0], TOPICS["odom"][0])}
         finally:
             stop.set()
             await sim
+    # The small, frequent messages have a connection of their own (never behind a scan).
+    assert publishers[TOPICS["imu"][0]] == publishers[TOPICS["odom"][0]]
+    assert len(publishers[TOPICS["imu"][0]]) == len(publishers[TOPICS["lidar"][0]]) == 1
+    assert publishers[TOPICS["imu"][0]] != publishers[TOPICS["lidar"][0]]
     assert len(imu) == 20
     assert imu[-1]["linear_acceleration"]["z"] == pytest.approx(9.80665, abs=1e-6)
     stamps = [m["header"]["stamp"]["sec"] * 10**9 + m["header"]["stamp"]["nanosec"] for m in imu]
