@@ -275,15 +275,23 @@ def network_summary(topics: Mapping[str, Mapping[str, Any]], loopback_bytes: int
                     duration_s: float) -> dict[str, Any]:
     """Loopback load against the payload it carried, like the thesis's table 4.10.
 
-    Payload and publisher-side wire rates sum every traced topic (bytes x rate).
+    Payload and publisher-side wire rates sum every traced topic (bytes x rate), and again the
+    four sensor streams alone: the thesis's 291 kB/s of payload (table 4.9) were those.
     """
     payload_bps = sum(t["payload_bytes"] * t["rate_hz"] for t in topics.values())
     wire_bps = sum(t["wire_in_bytes"] * t["rate_hz"] for t in topics.values())
+    sensors = [t for name, t in topics.items() if name in SENSOR_TOPICS]
+    sensor_payload_bps = sum(t["payload_bytes"] * t["rate_hz"] for t in sensors)
+    sensor_wire_bps = sum(t["wire_in_bytes"] * t["rate_hz"] for t in sensors)
     loopback_bps = loopback_bytes / duration_s if loopback_bytes is not None else math.nan
     return {"payload_bytes_per_s": payload_bps, "wire_in_bytes_per_s": wire_bps,
             "loopback_bytes_per_s": loopback_bps,
             "wire_over_payload": wire_bps / payload_bps if payload_bps else math.nan,
             "loopback_over_payload": loopback_bps / payload_bps if payload_bps else math.nan,
+            "sensor_payload_bytes_per_s": sensor_payload_bps,
+            "sensor_wire_in_bytes_per_s": sensor_wire_bps,
+            "sensor_wire_over_payload": (sensor_wire_bps / sensor_payload_bps
+                                         if sensor_payload_bps else math.nan),
             "thesis": {"wire_bytes_per_s": THESIS_WIRE_BPS,
                        "payload_bytes_per_s": THESIS_PAYLOAD_BPS, "overhead": THESIS_OVERHEAD}}
 
@@ -401,7 +409,11 @@ def _network_rows(network: Mapping[str, Any]) -> list[str]:
             f"({network['wire_over_payload']:.3f}x), loopback "
             f"{_fmt_bytes(network['loopback_bytes_per_s'])}/s "
             f"({network['loopback_over_payload']:.2f}x); thesis 1.62 MB/s wire for 291 kB/s "
-            f"payload ({THESIS_OVERHEAD:g}x)"]
+            f"payload ({THESIS_OVERHEAD:g}x)",
+            f"  sensor streams ({', '.join(SENSOR_TOPICS)}): payload "
+            f"{_fmt_bytes(network.get('sensor_payload_bytes_per_s', math.nan))}/s, wire "
+            f"{_fmt_bytes(network.get('sensor_wire_in_bytes_per_s', math.nan))}/s "
+            f"({network.get('sensor_wire_over_payload', math.nan):.3f}x)"]
 
 
 def render_comparison(runs: Sequence[Mapping[str, Any]]) -> str:
@@ -426,4 +438,9 @@ def render_comparison(runs: Sequence[Mapping[str, Any]]) -> str:
         overheads = [r["topics"].get(topic, {}).get("overhead_in", math.nan) for r in runs]
         lines.append(f"{topic:<26}{'wire/payload':<18}"
                      + "".join(f"{o:>12.3f}" for o in overheads) + f"{THESIS_OVERHEAD:>12g}")
+    for label, key in (("sensor streams", "sensor_wire_over_payload"),
+                       ("all topics", "wire_over_payload")):
+        ratios = [r.get("network", {}).get(key, math.nan) for r in runs]
+        lines.append(f"{label:<26}{'wire/payload':<18}"
+                     + "".join(f"{o:>12.3f}" for o in ratios) + f"{THESIS_OVERHEAD:>12g}")
     return "\n".join(lines)

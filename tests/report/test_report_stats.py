@@ -147,6 +147,12 @@ def test_process_and_network_summaries():
     network = network_summary(topics, loopback_bytes=44_000, duration_s=10.0)
     assert network["wire_over_payload"] == pytest.approx(1.1)
     assert network["loopback_over_payload"] == pytest.approx(2.2)
+    assert math.isnan(network["sensor_wire_over_payload"]), "no sensor stream among them"
+    topics["/lidar/points"] = {"payload_bytes": 10_000, "wire_in_bytes": 10_100, "rate_hz": 2.0}
+    topics["/imu/data"] = {"payload_bytes": 100, "wire_in_bytes": 190, "rate_hz": 10.0}
+    network = network_summary(topics, loopback_bytes=None, duration_s=10.0)
+    assert network["sensor_wire_over_payload"] == pytest.approx((20_200 + 1900) / 21_000)
+    assert network["wire_over_payload"] == pytest.approx((22_100 + 2200) / 23_000)
 
 
 def test_tables_render_every_stage_and_the_comparison():
