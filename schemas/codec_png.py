@@ -9,12 +9,12 @@ channel order is reversed on the way in and out.
 
 from __future__ import annotations
 
-import base64
 import binascii
 import math
 
 import cv2
 import numpy as np
+import pybase64
 
 from schemas.errors import DecodeError, EncodeError
 
@@ -36,7 +36,7 @@ def encode_png_data(json_text: bytes) -> bytes:
     ok, png = cv2.imencode(".png", np.ascontiguousarray(rgb[:, :, ::-1]))
     if not ok:
         raise EncodeError("OpenCV could not encode the PNG")
-    return base64.b64encode(png.tobytes())
+    return pybase64.b64encode(png.tobytes())
 
 
 def encode_png_op(json_text: bytes) -> bytes:
@@ -47,7 +47,7 @@ def encode_png_op(json_text: bytes) -> bytes:
 def decode_png_data(data_b64: str) -> bytes:
     """The original JSON text from a ``png`` op's ``data`` (``\\n`` padding stripped)."""
     try:
-        png = base64.b64decode(data_b64, validate=True)
+        png = pybase64.b64decode(data_b64, validate=True)
     except (binascii.Error, ValueError):
         raise DecodeError("png data is not base64") from None
     image = cv2.imdecode(np.frombuffer(png, dtype=np.uint8), cv2.IMREAD_UNCHANGED)

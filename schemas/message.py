@@ -11,13 +11,13 @@ without a copy, so a 4 MB PointCloud2 costs microseconds.
 
 from __future__ import annotations
 
-import base64
 import binascii
 import math
 from collections.abc import Callable, Mapping
 from typing import Any, cast
 
 import numpy as np
+import pybase64
 
 from schemas import primitives, specs
 from schemas.errors import MessageValidationError
@@ -171,7 +171,7 @@ def _bytes(field: FieldSpec, value: Any, now_ns: int) -> bytes:
         out = bytes(value)
     elif isinstance(value, str):
         try:
-            out = base64.b64decode(value, validate=True)
+            out = pybase64.b64decode(value, validate=True)
         except (binascii.Error, ValueError):
             raise _FieldError("expected base64 text or a list of ints 0..255") from None
     elif isinstance(value, list | tuple):
