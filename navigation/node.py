@@ -20,8 +20,9 @@ from concurrent.futures import ThreadPoolExecutor
 from typing import Any
 
 from clients import RosbridgeClient, Subscription
+from clients.node_links import node_links
 from clients.protocol import Encoding
-from clients.tracing import Tracer, telemetry
+from clients.tracing import Tracer
 from navigation.config import NavigationConfig
 from navigation.diagnostics import SensorCounters, diagnostic_array_msg
 from navigation.imu import ImuTracker
@@ -31,11 +32,7 @@ from navigation.processors import (
     Outputs,
     Processors,
 )
-from schemas.process_tuning import (
-    background_priority,
-    freeze_startup_heap,
-    tune_process,
-)
+from schemas.process_tuning import background_priority
 from schemas.tracing import header_stamp_ns
 
 log = logging.getLogger(__name__)
@@ -193,12 +190,7 @@ async def serve(
     url: str, config: NavigationConfig, stop: asyncio.Event, *, encoding: Encoding = "cbor"
 ) -> None:
     """Connect to the bridge at ``url`` and run the navigation node until ``stop``."""
-    tracer = Tracer("navigation")
-    async with (RosbridgeClient(url, encoding=encoding, name="navigation", tracer=tracer) as client,
-                RosbridgeClient(url, encoding=encoding, name="navigation-realtime",
-                                tracer=tracer) as realtime):
+    async with node_links(url, "navigation", encoding=encoding) as links:
         log.info("navigation connected to %s (%s, bulk and realtime connections)", url, encoding)
-        tune_process()
-        freeze_startup_heap()
-        async with telemetry(client, tracer, also=[realtime]):
-            await NavigationNode(client, config, tracer=tracer, realtime=realtime).run(stop)
+        await NavigationNode(links.bulk, config, tracer=links.tracer,
+                             realtime=links.realtime).run(stop)

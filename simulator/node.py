@@ -24,13 +24,10 @@ from concurrent.futures import ThreadPoolExecutor
 from typing import Any
 
 from clients import RosbridgeClient
+from clients.node_links import node_links
 from clients.protocol import Encoding
-from clients.tracing import Tracer, telemetry
-from schemas.process_tuning import (
-    background_priority,
-    freeze_startup_heap,
-    tune_process,
-)
+from clients.tracing import Tracer
+from schemas.process_tuning import background_priority
 from simulator.camera import OPTICAL_TO_BODY, Camera
 from simulator.config import MountConfig, SimConfig
 from simulator.dynamics import Command, StepResult, VesselDynamics, VesselState
@@ -284,14 +281,9 @@ async def serve(url: str, cfg: SimConfig, stop: asyncio.Event, *, encoding: Enco
     """Build the scene (off the event loop), connect to the bridge at `url`, run until `stop`."""
     if scene is None:
         scene = await asyncio.to_thread(build_scene, cfg.scene, seed=cfg.seed)
-    tracer = Tracer("simulator")
-    async with (RosbridgeClient(url, encoding=encoding, name="simulator",
-                                connect_timeout=connect_timeout_s, tracer=tracer) as client,
-                RosbridgeClient(url, encoding=encoding, name="simulator-realtime",
-                                connect_timeout=connect_timeout_s, tracer=tracer) as realtime):
+    async with node_links(url, "simulator", encoding=encoding,
+                          connect_timeout_s=connect_timeout_s) as links:
         log.info("simulator connected to %s (%s, bulk and realtime connections); %d triangles",
                  url, encoding, scene.triangle_count)
-        tune_process()
-        freeze_startup_heap()  # the scene's meshes included: its arrays are never garbage
-        async with telemetry(client, tracer, also=[realtime]):
-            await SimulatorNode(client, cfg, scene, realtime=realtime, tracer=tracer).run(stop)
+        await SimulatorNode(links.bulk, cfg, scene, realtime=links.realtime,
+                            tracer=links.tracer).run(stop)

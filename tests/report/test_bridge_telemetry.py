@@ -14,6 +14,7 @@ import pytest
 from bridge.config import BridgeConfig
 from bridge.server import run_bridge
 from clients import RosbridgeClient
+from clients.node_links import node_links
 from clients.report import spans_of_batch
 from clients.tracing import Tracer, telemetry
 from schemas.tracing import (
@@ -74,6 +75,38 @@ async def test_every_stage_of_a_message_reaches_a_trace_reader(bridge):
     assert mine["send"].start_ns <= mine["bridge_in"].start_ns <= mine["fanout"].end_ns
     assert mine["bridge_in"].wire_bytes == mine["send"].wire_bytes > 0
     assert not any(s.topic.startswith("/riverbridge/") for s in spans)
+
+
+async def test_both_connections_of_a_node_are_named_after_its_process(bridge):
+    fix = ("/gnss/fix", "sensor_msgs/msg/NavSatFix")
+    async with RosbridgeClient(bridge.url, name="reader") as reader, \
+            RosbridgeClient(bridge.url, name="pub") as pub, \
+            node_links(bridge.url, "watcher") as links:
+        assert links.bulk is not links.realtime
+        trace = await reader.subscribe(TRACE_TOPIC, TRACE_TYPE, maxsize=1000)
+        stats = await reader.subscribe(STATS_TOPIC, STATS_TYPE, maxsize=100)
+        imu = await links.realtime.subscribe(*IMU)
+        fixes = await links.bulk.subscribe(*fix)
+        await pub.advertise(*IMU)
+        await pub.advertise(*fix)
+        await asyncio.sleep(2.0)  # both connections announce the process (once a second)
+        stamp_ns = time.time_ns()
+        await pub.publish(IMU[0], imu_msg(stamp_ns))
+        await pub.publish(fix[0], imu_msg(stamp_ns))
+        await imu.get()
+        await fixes.get()
+
+        def traced(spans):
+            seen = {(s.topic, s.stage) for s in spans if s.stamp_ns == stamp_ns}
+            return seen >= {(t, stage) for t in (IMU[0], fix[0]) for stage in ("fanout", "decode")}
+
+        spans = await collect_spans(trace, traced)
+        announced = [m.msg for m in [await stats.get() for _ in range(4)]]
+    peers = {s.topic: s.peer for s in spans if s.stamp_ns == stamp_ns and s.stage == "fanout"}
+    assert peers == {IMU[0]: "watcher", fix[0]: "watcher"}
+    decoded = {s.topic for s in spans if s.stamp_ns == stamp_ns and s.stage == "decode"}
+    assert decoded == {IMU[0], fix[0]}, "one tracer records both connections"
+    assert {m["process"] for m in announced} >= {"watcher"}
 
 
 async def test_stats_service_metrics_and_client_count(bridge):
