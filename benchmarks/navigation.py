@@ -33,7 +33,8 @@ from sklearn.cluster import DBSCAN
 from sklearn.metrics import adjusted_rand_score
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path[:0] = [str(ROOT), str(ROOT / "tests" / "navigation"), str(ROOT / "tests" / "simulator")]
+sys.path[:0] = [str(ROOT), str(ROOT / "tests"), str(ROOT / "tests" / "navigation"),
+                str(ROOT / "tests" / "simulator")]
 
 from clients import RosbridgeClient  # noqa: E402
 from navigation.boxes import refine_boxes  # noqa: E402

@@ -71,7 +71,7 @@ def rate_hz(stamps_s: list[float]) -> float:
 async def test_every_sensor_topic_arrives_at_its_configured_rate(registry):
     expected = configured_rates_hz(SimConfig())
     with running_bridge() as (_, url), running(simulator_argv(url)) as sim:
-        await asyncio.to_thread(sim.wait_for, re.compile("simulator connected"))
+        await asyncio.to_thread(sim.wait_for_line, re.compile("simulator connected"))
         stamps = await record_stamps(url, registry, WARMUP_S, WINDOW_S)
         assert sim.process.poll() is None, sim.text()
     measured = {name: rate_hz(stamps[name]) for name in expected}

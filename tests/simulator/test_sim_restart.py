@@ -61,7 +61,7 @@ async def test_simulator_resumes_every_topic_after_the_bridge_restarts(tmp_path,
     with running_bridge() as (first_bridge, url):
         port = url.rsplit(":", 1)[1]
         with running(simulator_argv(url, config)) as sim:
-            await asyncio.to_thread(sim.wait_for, connected)
+            await asyncio.to_thread(sim.wait_for_line, connected)
             before = await first_of_each(url, registry, RESUME_TIMEOUT_S)
             assert_all_arrived(before, sim.text())
 
@@ -73,7 +73,7 @@ async def test_simulator_resumes_every_topic_after_the_bridge_restarts(tmp_path,
             with running_bridge(int(port)) as (_, same_url):
                 assert same_url == url
                 resumed = re.compile(r"simulator connected to .*registrations restored")
-                await asyncio.to_thread(sim.wait_for, resumed, RESUME_TIMEOUT_S, lines_at_stop)
+                await asyncio.to_thread(sim.wait_for_line, resumed, RESUME_TIMEOUT_S, lines_at_stop)
                 after = await first_of_each(url, registry, RESUME_TIMEOUT_S)
             assert sim.process.poll() is None, sim.text()
     assert_all_arrived(after, sim.text())

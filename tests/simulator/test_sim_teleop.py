@@ -207,7 +207,7 @@ async def test_teleop_in_a_terminal_steers_the_simulated_vessel(tmp_path, regist
             try:
                 async with RosbridgeClient(url, registry=registry, connect_timeout=60) as c:
                     odom = await c.subscribe(*TOPICS["odom"], maxsize=1000)
-                    await asyncio.to_thread(sim.wait_for, re.compile("simulator connected"))
+                    await asyncio.to_thread(sim.wait_for_line, re.compile("simulator connected"))
                     await asyncio.to_thread(wait_for_output, controller, "q: quit", 60.0)
                     before = await latest_odom(odom)
                     os.write(controller, b"\x1b[A" * 10 + b"a")  # full ahead, a little to port
