@@ -187,10 +187,12 @@ async def _every(period_s: float, action: Callable[[], Awaitable[None]]) -> None
 
 
 async def serve(
-    url: str, config: NavigationConfig, stop: asyncio.Event, *, encoding: Encoding = "cbor"
+    url: str, config: NavigationConfig, stop: asyncio.Event, *, encoding: Encoding = "cbor",
+    connect_timeout_s: float = 10.0,
 ) -> None:
     """Connect to the bridge at ``url`` and run the navigation node until ``stop``."""
-    async with node_links(url, "navigation", encoding=encoding) as links:
+    async with node_links(url, "navigation", encoding=encoding,
+                          connect_timeout_s=connect_timeout_s) as links:
         log.info("navigation connected to %s (%s, bulk and realtime connections)", url, encoding)
         await NavigationNode(links.bulk, config, tracer=links.tracer,
                              realtime=links.realtime).run(stop)

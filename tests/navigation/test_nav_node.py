@@ -218,6 +218,13 @@ def test_cli_names_a_bad_config(tmp_path, caplog):
     assert "epsilon" in caplog.text
 
 
+async def test_cli_runs_for_a_duration_and_reports_an_unreachable_bridge(bridge_url):
+    quiet = ["--log-level", "CRITICAL"]
+    assert await asyncio.to_thread(main, ["--bridge", bridge_url, "--duration", "1.0", *quiet]) == 0
+    unreachable = ["--bridge", "ws://127.0.0.1:9", "--connect-timeout", "0.3", *quiet]
+    assert await asyncio.to_thread(main, unreachable) == 1
+
+
 def descendants(pid: int) -> set[int]:
     """Process ids below ``pid`` (Linux /proc), children first."""
     found: set[int] = set()
