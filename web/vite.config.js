@@ -4,6 +4,9 @@ import { defineConfig } from "vite";
 
 export default defineConfig({
   base: "./",
+  // module workers: roslib loads its websocket transport with a dynamic import, which needs
+  // code splitting, and Vite's default worker format (iife) cannot split
+  worker: { format: "es" },
   build: {
     outDir: "dist",
     emptyOutDir: true,

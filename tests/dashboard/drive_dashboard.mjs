@@ -7,15 +7,17 @@
 import { openPage, runScenario } from "../../web/scripts/browser.mjs";
 
 const [pageUrl, screenshotPath] = process.argv.slice(2);
-const CANVASES = ["map", "camera", "imu", "latency"];
-const LIVE_TOPICS = ["/lidar/points", "/camera/image/compressed", "/imu/data", "/odom",
-  "/nav/boxes", "/nav/lines", "/nav/obstacle_map"];
+const CANVASES = ["map", "camera", "radar", "imu", "latency"];
+const LIVE_TOPICS = ["/lidar/points", "/camera/image/compressed", "/radar/image", "/imu/data",
+  "/odom", "/nav/boxes", "/nav/lines", "/nav/obstacle_map"];
 const STEER_MS = 3000;
 
-/** A cheap fingerprint of each canvas's pixels (sampled sums), compared between two moments. */
+/**
+ * A cheap fingerprint of each canvas's pixels, compared between two moments: the page's panels
+ * by id, plus the radar's polar raster alone (no caption, so only a new sweep changes it).
+ */
 function fingerprints(ids) {
-  return Object.fromEntries(ids.map((id) => {
-    const canvas = document.getElementById(id);
+  const fingerprint = (canvas) => {
     const data = canvas.getContext("2d").getImageData(0, 0, canvas.width, canvas.height).data;
     let sum = 0;
     let lit = 0;
@@ -24,8 +26,25 @@ function fingerprints(ids) {
       sum = (sum * 31 + value * (i + 1)) % 2147483647;
       if (value > 400) lit += 1; // brighter than every background and grid line
     }
-    return [id, { sum, lit }];
-  }));
+    return { sum, lit };
+  };
+  const prints = Object.fromEntries(ids.map((id) => [id, fingerprint(document.getElementById(id))]));
+  prints.radar_raster = fingerprint(window.riverbridgeDashboard.panels.radar.raster);
+  return prints;
+}
+
+/** What the LIDAR worker and the radar panel have received, and what the main connection took. */
+function deliveryState() {
+  const d = window.riverbridgeDashboard;
+  return {
+    worker_connected: d.lidar.connected,
+    worker_errors: d.lidar.errors,
+    received: d.counts["/lidar/points"],
+    map_points: d.panels.map.pointCount,
+    map_has_points_bitmap: d.panels.map.pointsBitmap !== null,
+    main_connection_topics: d.connection.specs.map((spec) => spec.name),
+    radar_sweeps: d.panels.radar.sweeps,
+  };
 }
 
 async function waitForTopics(page, topics, timeoutMs) {
@@ -69,9 +88,11 @@ await runScenario("drive_dashboard.mjs", 150000, async () => {
     await waitForTopics(page, LIVE_TOPICS, 60000);
     await page.waitForSelector("#topics-table", { timeout: 10000 });
     const first = await page.evaluate(fingerprints, CANVASES);
+    const deliveryFirst = await page.evaluate(deliveryState);
     const firstTopics = await page.locator("#topics").innerText();
     const steering = await steer(page);
     const second = await page.evaluate(fingerprints, CANVASES);
+    const deliverySecond = await page.evaluate(deliveryState);
     const state = await page.evaluate(() => {
       const d = window.riverbridgeDashboard;
       return { counts: d.counts, frames: d.frames, trace: d.trace.medians(), ages: d.ages.medians() };
@@ -84,6 +105,9 @@ await runScenario("drive_dashboard.mjs", 150000, async () => {
       first,
       second,
       panels_changed: Object.fromEntries(CANVASES.map((id) => [id, first[id].sum !== second[id].sum])),
+      radar_raster_changed: first.radar_raster.sum !== second.radar_raster.sum,
+      delivery_first: deliveryFirst,
+      delivery_second: deliverySecond,
       topics_text: await page.locator("#topics").innerText(),
       first_topics_text: firstTopics,
       page_errors: errors,

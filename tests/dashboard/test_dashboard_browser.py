@@ -84,17 +84,38 @@ def seen(stack: Stack) -> dict[str, Any]:
 
 def test_page_connects_and_receives_every_panels_topics(seen: dict[str, Any]) -> None:
     assert seen["connected"]
-    for topic in ("/lidar/points", "/camera/image/compressed", "/imu/data", "/odom",
-                  "/nav/boxes", "/nav/radar_detections", "/nav/lines", "/nav/obstacle_map"):
+    for topic in ("/lidar/points", "/camera/image/compressed", "/radar/image", "/imu/data",
+                  "/odom", "/nav/boxes", "/nav/radar_detections", "/nav/lines",
+                  "/nav/obstacle_map"):
         assert seen["counts"][topic] > 0, topic
     assert seen["page_errors"] == []
 
 
 def test_every_canvas_panel_shows_live_data(seen: dict[str, Any]) -> None:
     # pixels differ between two moments seconds apart, and each panel drew more than its frame
-    assert seen["panels_changed"] == {"map": True, "camera": True, "imu": True, "latency": True}
-    for panel in ("map", "camera", "imu", "latency"):
+    panels = ("map", "camera", "radar", "imu", "latency")
+    assert seen["panels_changed"] == dict.fromkeys(panels, True)
+    for panel in panels:
         assert seen["second"][panel]["lit"] > 500, panel
+
+
+def test_radar_panel_draws_each_new_sweep(seen: dict[str, Any]) -> None:
+    # the polar raster itself (not only its caption) differs after the vessel has turned
+    assert seen["radar_raster_changed"]
+    assert seen["second"]["radar_raster"]["lit"] > 500
+    assert seen["delivery_second"]["radar_sweeps"] > seen["delivery_first"]["radar_sweeps"] > 0
+
+
+def test_lidar_points_reach_the_map_through_the_worker(seen: dict[str, Any]) -> None:
+    first, second = seen["delivery_first"], seen["delivery_second"]
+    assert second["worker_connected"]
+    assert second["worker_errors"] == []
+    assert second["received"] > first["received"] > 0  # still arriving, scan after scan
+    assert 1000 < second["map_points"] <= 40_000  # decimated in the worker
+    assert second["map_has_points_bitmap"]  # plotted in the worker, drawn on the map
+    # the page's own connection never subscribes to the 2.9 MB scan: only the worker does
+    assert "/lidar/points" not in second["main_connection_topics"]
+    assert "/radar/image" in second["main_connection_topics"]
 
 
 def test_topic_list_names_topics_types_rates_and_clients(seen: dict[str, Any]) -> None:

@@ -1,13 +1,33 @@
 // Canvas sizing for crisp drawing at any devicePixelRatio; drawing code works in CSS pixels.
 
+// CSS sizes of the canvases, kept by a ResizeObserver: reading clientWidth every frame would
+// force a synchronous layout whenever some text on the page changed since the last one.
+const cssSizes = new WeakMap();
+const resizeObserver = new ResizeObserver((entries) => {
+  for (const entry of entries) {
+    cssSizes.set(entry.target, { width: entry.contentRect.width, height: entry.contentRect.height });
+  }
+});
+
+function cssSize(canvas) {
+  let size = cssSizes.get(canvas);
+  if (!size) {
+    size = { width: canvas.clientWidth, height: canvas.clientHeight };
+    cssSizes.set(canvas, size);
+    resizeObserver.observe(canvas);
+  }
+  return size;
+}
+
 /**
  * Match the backing store to the element's size. Returns {ctx, width, height, resized}, with
  * `ctx` scaled so that one unit is one CSS pixel.
  */
 export function fitCanvas(canvas) {
   const ratio = window.devicePixelRatio || 1;
-  const width = Math.max(1, Math.floor(canvas.clientWidth));
-  const height = Math.max(1, Math.floor(canvas.clientHeight));
+  const size = cssSize(canvas);
+  const width = Math.max(1, Math.floor(size.width));
+  const height = Math.max(1, Math.floor(size.height));
   const resized = canvas.width !== Math.floor(width * ratio) ||
     canvas.height !== Math.floor(height * ratio);
   if (resized) {

@@ -1,13 +1,10 @@
 // Top-down map around the vessel (thesis figures 16, 19, 21 as one live picture): LIDAR points
 // coloured by height, LIDAR cluster boxes, radar CFAR detections and the fused obstacle grid.
 // Vessel frame, bow up; sensor mounts come from /tf_static. Layers are rebuilt only when their
-// message arrives; a frame just composites them.
+// message arrives; a frame just composites them. The LIDAR layer arrives as a finished bitmap
+// from the LIDAR worker, which is told the view (`onView`) whenever it changes.
 import { COLORS, drawWaiting, fitCanvas } from "../canvas.js";
-import { decimateCloud } from "../pointcloud.js";
-import { bytesOf } from "../rosmsg.js";
 
-const MAX_POINTS = 40000; // drawn per scan; a full scan is ~180k, more adds no visible detail
-const Z_RANGE_M = [-3.5, 6.0]; // height colour scale in the LIDAR frame (mounted 3 m above water)
 const VESSEL_LENGTH_M = 7.0; // simulator VesselConfig.length_m
 const VESSEL_BEAM_M = 2.5; // simulator VesselConfig.beam_m
 
@@ -16,12 +13,13 @@ export class MapPanel {
     this.canvas = canvas;
     this.halfRangeM = 60;
     this.mounts = new Map(); // frame_id -> [x_m, y_m] in base_link
-    this.points = null; // (k, 3) float32, vessel frame
+    this.pointsBitmap = null; // the LIDAR worker's plot of the latest scan, device pixels
+    this.pointCount = 0;
+    this.onView = null; // (view) => void: where the map's view goes when it changes
+    this.viewKey = ""; // the view last sent to the worker, as JSON
     this.boxes = [];
     this.detections = [];
     this.grid = null; // {image: canvas, pixels: ImageData, resolution, origin: [x_m, y_m]}
-    this.pointsLayer = document.createElement("canvas");
-    this.pointsImage = null; // ImageData reused scan after scan (no 2 MB allocation per scan)
     this.raster = document.createElement("canvas"); // background, rings, grid and points
     this.rasterStale = true;
     this.dirty = true;
@@ -38,20 +36,19 @@ export class MapPanel {
       const v = t.transform.translation;
       this.mounts.set(t.child_frame_id, [v.x, v.y]);
     }
+    this.viewKey = ""; // the worker offsets the points by these mounts: resend the view
+    this.dirty = true;
   }
 
   #offset(frameId) {
     return this.mounts.get(frameId) ?? [0, 0];
   }
 
-  onCloud(cloud) {
-    const points = decimateCloud(cloud, bytesOf(cloud.data), MAX_POINTS);
-    const [dx, dy] = this.#offset(cloud.header.frame_id);
-    for (let i = 0; i < points.length; i += 3) {
-      points[i] += dx;
-      points[i + 1] += dy;
-    }
-    this.points = points;
+  /** A scan plotted by the LIDAR worker: `bitmap` covers the canvas in device pixels. */
+  onPointsImage(bitmap, pointCount) {
+    this.pointsBitmap?.close();
+    this.pointsBitmap = bitmap;
+    this.pointCount = pointCount;
     this.rasterStale = true;
     this.dirty = true;
   }
@@ -97,6 +94,7 @@ export class MapPanel {
     if (!this.dirty && !resized) return;
     this.dirty = false;
     const view = { cx: width / 2, cy: height * 0.55, scale: Math.min(width, height) / (2 * this.halfRangeM) };
+    this.#publishView(view, width, height, ratio);
     if (this.rasterStale || resized) {
       this.#drawRaster(view, width, height, ratio);
       this.rasterStale = false;
@@ -106,7 +104,20 @@ export class MapPanel {
     this.#drawDetections(ctx, view);
     this.#drawVessel(ctx, view);
     this.#drawLegend(ctx, width, height);
-    if (!this.points && !this.grid) drawWaiting(ctx, width, height * 0.3, "/lidar/points");
+    if (!this.pointsBitmap && !this.grid) drawWaiting(ctx, width, height * 0.3, "/lidar/points");
+  }
+
+  /** Tell the LIDAR worker the view in device pixels, when it differs from the last one sent. */
+  #publishView({ cx, cy, scale }, width, height, ratio) {
+    const view = {
+      widthPx: Math.floor(width * ratio), heightPx: Math.floor(height * ratio),
+      cxPx: cx * ratio, cyPx: cy * ratio,
+      pxPerM: scale * ratio, mounts: Object.fromEntries(this.mounts),
+    };
+    const key = JSON.stringify(view);
+    if (key === this.viewKey || !this.onView) return;
+    this.viewKey = key;
+    this.onView(view);
   }
 
   /** Background, range rings, obstacle grid and LIDAR points, in device pixels. */
@@ -121,11 +132,7 @@ export class MapPanel {
     ctx.fillRect(0, 0, width, height);
     this.#drawRings(ctx, view);
     this.#drawGrid(ctx, view);
-    if (this.points) {
-      this.pointsImage = renderPoints(this.pointsLayer, this.pointsImage, this.points, view,
-        pixelWidth, pixelHeight, ratio);
-      ctx.drawImage(this.pointsLayer, 0, 0, width, height);
-    }
+    if (this.pointsBitmap) ctx.drawImage(this.pointsBitmap, 0, 0, width, height);
   }
 
   #drawRings(ctx, { cx, cy, scale }) {
@@ -200,61 +207,10 @@ export class MapPanel {
       ctx.fillText(label, x + 14, y);
       x += ctx.measureText(label).width + 30;
     }
-    const counts = `${this.points ? this.points.length / 3 : 0} pts · ${this.boxes.length} boxes · ${this.detections.length} radar`;
+    const counts = `${this.pointCount} pts · ${this.boxes.length} boxes · ${this.detections.length} radar`;
     ctx.fillText(counts, width - ctx.measureText(counts).width - 10, 16);
   }
 }
-
-/**
- * Plot `points : (k, 3)` into `layer` pixel by pixel (one putImageData, no path per point).
- * Reuses `image` when its size still fits; returns the ImageData used.
- */
-function renderPoints(layer, image, points, { cx, cy, scale }, pixelWidth, pixelHeight, ratio) {
-  if (layer.width !== pixelWidth || layer.height !== pixelHeight) {
-    Object.assign(layer, { width: pixelWidth, height: pixelHeight });
-  }
-  const ctx = layer.getContext("2d");
-  if (image?.width !== pixelWidth || image?.height !== pixelHeight) {
-    image = ctx.createImageData(pixelWidth, pixelHeight);
-  }
-  const pixels = new Uint32Array(image.data.buffer);
-  pixels.fill(0);
-  const palette = HEIGHT_PALETTE;
-  const [zLow, zHigh] = Z_RANGE_M;
-  const s = scale * ratio;
-  for (let i = 0; i < points.length; i += 3) {
-    const px = Math.round(cx * ratio - points[i + 1] * s);
-    const py = Math.round(cy * ratio - points[i] * s);
-    if (px < 0 || py < 0 || px >= pixelWidth - 1 || py >= pixelHeight - 1) continue;
-    const level = Math.max(0, Math.min(255, ((points[i + 2] - zLow) / (zHigh - zLow)) * 255)) | 0;
-    const colour = palette[level];
-    const at = py * pixelWidth + px; // a 2 x 2 dot: single pixels vanish on a busy map
-    pixels[at] = colour;
-    pixels[at + 1] = colour;
-    pixels[at + pixelWidth] = colour;
-    pixels[at + pixelWidth + 1] = colour;
-  }
-  ctx.putImageData(image, 0, 0);
-  return image;
-}
-
-/**
- * 256 ABGR words by height: water returns (bottom ~8 %) a dim blue that stays in the
- * background, then green through yellow for banks, vegetation and obstacles.
- */
-function heightPalette() {
-  const palette = new Uint32Array(256);
-  const waterTop = 20;
-  for (let i = 0; i < 256; i++) {
-    const t = Math.max(0, (i - waterTop) / (255 - waterTop));
-    let [r, g, b] = [40 + 120 * t + 95 * t * t, 150 + 105 * t, 90 * (1 - t)];
-    if (i < waterTop) [r, g, b] = [24, 52, 88];
-    palette[i] = (255 << 24) | (Math.round(b) << 16) | (Math.round(g) << 8) | Math.round(r);
-  }
-  return palette;
-}
-
-const HEIGHT_PALETTE = heightPalette();
 
 function niceStep(raw) {
   const power = 10 ** Math.floor(Math.log10(raw));
