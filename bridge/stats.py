@@ -29,6 +29,7 @@ from schemas.tracing import (
     STATS_SERVICE_TYPE,
     STATS_TOPIC,
     STATS_TYPE,
+    TRACE_PERIOD_S,
     TRACE_TOPIC,
     TRACE_TYPE,
     ResourceSampler,
@@ -129,16 +130,19 @@ class BridgeTelemetry:
         return self._core.publish_external(BRIDGE_NODE, CLIENT_COUNT_TOPIC, CLIENT_COUNT_TYPE,
                                            {"data": count}, time.time_ns(), latch=True)
 
+    def publish_spans(self) -> list[Effect]:
+        """The spans recorded since the last call, for whoever subscribes (drained either way)."""
+        spans = self.tracer.spans.drain()
+        if not spans or not self._listened(TRACE_TOPIC):
+            return []
+        return self._core.publish_external(BRIDGE_NODE, TRACE_TOPIC, TRACE_TYPE,
+                                           span_array_msg(PROCESS_NAME, spans), time.time_ns())
+
     def publish_once(self) -> list[Effect]:
-        """The spans recorded since the last call and the bridge's ProcessStats, for whoever
-        subscribes to them (spans are drained either way)."""
+        """`publish_spans`, and the bridge's ProcessStats for whoever subscribes to them."""
         now_ns = time.time_ns()
         self.cpu_percent = self._sampler.cpu_percent()
-        effects = self.clients_changed()
-        spans = self.tracer.spans.drain()
-        if spans and self._listened(TRACE_TOPIC):
-            effects += self._core.publish_external(
-                BRIDGE_NODE, TRACE_TOPIC, TRACE_TYPE, span_array_msg(PROCESS_NAME, spans), now_ns)
+        effects = self.clients_changed() + self.publish_spans()
         if not self._listened(STATS_TOPIC):
             return effects
         traffic = self.tracer.topics.values()
@@ -154,12 +158,19 @@ class BridgeTelemetry:
         return effects
 
     async def run(self, apply: Callable[[list[Effect]], None],
-                  period_s: float = PUBLISH_PERIOD_S) -> None:
-        """Publish every `period_s` until cancelled; `apply` carries out the effects."""
+                  period_s: float = PUBLISH_PERIOD_S,
+                  trace_period_s: float = TRACE_PERIOD_S) -> None:
+        """Publish spans every `trace_period_s` and stats every `period_s` until cancelled;
+        `apply` carries out the effects."""
         apply(self.clients_changed())
+        step_s = min(trace_period_s, period_s)
+        ticks_per_stats = max(1, round(period_s / step_s))
+        tick = 0
         while True:
-            await asyncio.sleep(period_s)
+            await asyncio.sleep(step_s)
+            tick += 1
             try:
-                apply(self.publish_once())
+                apply(self.publish_once() if tick % ticks_per_stats == 0
+                      else self.publish_spans())
             except Exception:  # telemetry must never take the bridge down
                 log.exception("publishing the bridge's telemetry failed")

@@ -1,11 +1,11 @@
-"""Stage tracing for client processes: record spans cheaply, publish them once a second.
+"""Stage tracing for client processes: record spans cheaply, publish them in small batches.
 
 A :class:`Tracer` is handed to :class:`clients.RosbridgeClient` (``tracer=``), which records
 ``encode`` and ``send`` for every publish and ``decode`` for every received message that has a
 ``header.stamp``; the simulator and navigation record their own stages (``generate``,
 ``wait``, ``process``...) into the same tracer. :func:`telemetry` publishes the spans on
-``/riverbridge/trace`` and the process's counters on ``/riverbridge/process_stats`` about
-once a second (docs/tracing.md). Recording costs a few ``time.time_ns()`` calls and one
+``/riverbridge/trace`` four times a second and the process's counters on
+``/riverbridge/process_stats`` once a second (docs/tracing.md). Recording costs a few ``time.time_ns()`` calls and one
 tuple append; it never waits.
 """
 
@@ -25,6 +25,7 @@ from schemas.tracing import (
     SPAN_CAPACITY,
     STATS_TOPIC,
     STATS_TYPE,
+    TRACE_PERIOD_S,
     TRACE_TOPIC,
     TRACE_TYPE,
     ResourceSampler,
@@ -116,9 +117,11 @@ class Tracer:
 @contextlib.asynccontextmanager
 async def telemetry(client: RosbridgeClient, tracer: Tracer,
                     period_s: float = PUBLISH_PERIOD_S,
+                    trace_period_s: float = TRACE_PERIOD_S,
                     dropped: Callable[[], int] | None = None,
                     also: Sequence[RosbridgeClient] = ()) -> AsyncIterator[None]:
-    """Publish ``tracer``'s batches and stats through ``client`` every ``period_s`` meanwhile.
+    """Publish ``tracer``'s span batches every ``trace_period_s`` and its stats every
+    ``period_s`` through ``client`` meanwhile.
 
     ``also``: the process's other connections. Each announces the same ProcessStats, because
     the bridge names a connection's fan-out spans by the process that announced itself on it
@@ -132,19 +135,26 @@ async def telemetry(client: RosbridgeClient, tracer: Tracer,
     for each in clients:
         await each.advertise(STATS_TOPIC, STATS_TYPE)
 
-    async def publish_once() -> None:
+    async def publish_spans() -> None:
         batch = tracer.batch_msg()
         if batch is not None:
             await client.publish(TRACE_TOPIC, batch)
+
+    async def publish_once() -> None:
+        await publish_spans()
         stats = tracer.stats_msg(time.time_ns(), count_dropped())
         for each in clients:
             await each.publish(STATS_TOPIC, stats)
 
     async def loop() -> None:
+        step_s = min(trace_period_s, period_s)
+        ticks_per_stats = max(1, round(period_s / step_s))
+        tick = 0
         while True:
-            await asyncio.sleep(period_s)
+            await asyncio.sleep(step_s)
+            tick += 1
             try:
-                await publish_once()
+                await (publish_once() if tick % ticks_per_stats == 0 else publish_spans())
             except Exception:  # telemetry must never end the process it observes
                 log.exception("%s: publishing telemetry failed", tracer.process)
 

@@ -109,6 +109,32 @@ async def test_both_connections_of_a_node_are_named_after_its_process(bridge):
     assert {m["process"] for m in announced} >= {"watcher"}
 
 
+async def test_span_batches_go_out_more_often_than_stats(bridge):
+    tracer = Tracer("often")
+    async with RosbridgeClient(bridge.url, name="reader") as reader, \
+            RosbridgeClient(bridge.url, name="often") as pub:
+        trace = await reader.subscribe(TRACE_TOPIC, TRACE_TYPE, maxsize=1000)
+        stats = await reader.subscribe(STATS_TOPIC, STATS_TYPE, maxsize=1000)
+        async with telemetry(pub, tracer, period_s=1.0, trace_period_s=0.1):
+            for k in range(12):  # a span for every batch
+                tracer.record(IMU[0], k, "generate", k, k + 1)
+                await asyncio.sleep(0.1)
+        await asyncio.sleep(0.5)
+        batches = [b for b in (m.msg for m in _all(trace)) if b["spans"]
+                   and b["spans"][0]["process"] == "often"]
+        announced = [m for m in (m.msg for m in _all(stats)) if m["process"] == "often"]
+    assert len(batches) >= 6, len(batches)
+    assert 1 <= len(announced) <= 3, len(announced)  # each second, and once more at the end
+    assert sorted(s["stamp_ns"] for b in batches for s in b["spans"]) == list(range(12))
+
+
+def _all(sub) -> list:
+    items = []
+    while (item := sub.get_nowait()) is not None:
+        items.append(item)
+    return items
+
+
 async def test_stats_service_metrics_and_client_count(bridge):
     async with RosbridgeClient(bridge.url, name="watcher") as watcher:
         counts = await watcher.subscribe("/client_count", "std_msgs/msg/Int32")
