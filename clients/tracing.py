@@ -5,8 +5,8 @@ A :class:`Tracer` is handed to :class:`clients.RosbridgeClient` (``tracer=``), w
 ``header.stamp``; the simulator and navigation record their own stages (``generate``,
 ``wait``, ``process``...) into the same tracer. :func:`telemetry` publishes the spans on
 ``/riverbridge/trace`` four times a second and the process's counters on
-``/riverbridge/process_stats`` once a second (docs/tracing.md). Recording costs a few ``time.time_ns()`` calls and one
-tuple append; it never waits.
+``/riverbridge/process_stats`` once a second (docs/tracing.md). Recording costs a few
+``time.time_ns()`` calls and one tuple append; it never waits.
 """
 
 from __future__ import annotations
