@@ -39,6 +39,24 @@ export function fitCanvas(canvas) {
   return { ctx, width, height, ratio, resized };
 }
 
+/**
+ * Begin a panel's frame: null when the panel is unchanged (`panel.dirty` false) and its canvas
+ * kept its size. Otherwise clears `panel.dirty` and the canvas; while `ready` is false it says
+ * it is waiting for `topic` and returns null too. Returns fitCanvas's {ctx, width, height}.
+ */
+export function beginPanelFrame(panel, topic, ready) {
+  const frame = fitCanvas(panel.canvas);
+  if (!panel.dirty && !frame.resized) return null;
+  panel.dirty = false;
+  frame.ctx.fillStyle = COLORS.background;
+  frame.ctx.fillRect(0, 0, frame.width, frame.height);
+  if (!ready) {
+    drawWaiting(frame.ctx, frame.width, frame.height, topic);
+    return null;
+  }
+  return frame;
+}
+
 export const COLORS = {
   background: "#0b1116",
   grid: "#1f2a33",

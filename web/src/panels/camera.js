@@ -1,6 +1,6 @@
 // Camera image with the extracted lines drawn over it (thesis figure 20). JPEGs are decoded by
 // the browser off the main thread (createImageBitmap); the previous bitmap is freed at once.
-import { COLORS, drawWaiting, fitCanvas } from "../canvas.js";
+import { beginPanelFrame, COLORS } from "../canvas.js";
 import { bytesOf } from "../rosmsg.js";
 
 export class CameraPanel {
@@ -38,15 +38,9 @@ export class CameraPanel {
   }
 
   draw() {
-    const { ctx, width, height, resized } = fitCanvas(this.canvas);
-    if (!this.dirty && !resized) return;
-    this.dirty = false;
-    ctx.fillStyle = COLORS.background;
-    ctx.fillRect(0, 0, width, height);
-    if (!this.bitmap) {
-      drawWaiting(ctx, width, height, "/camera/image/compressed");
-      return;
-    }
+    const frame = beginPanelFrame(this, "/camera/image/compressed", Boolean(this.bitmap));
+    if (!frame) return;
+    const { ctx, width, height } = frame;
     const scale = Math.min(width / this.bitmap.width, height / this.bitmap.height);
     const [w, h] = [this.bitmap.width * scale, this.bitmap.height * scale];
     const [x0, y0] = [(width - w) / 2, (height - h) / 2];

@@ -1,5 +1,5 @@
 // IMU angular rates and linear accelerations as rolling plots (thesis figure 15), 20 s window.
-import { COLORS, drawWaiting, fitCanvas } from "../canvas.js";
+import { beginPanelFrame, COLORS } from "../canvas.js";
 import { RollingSeries } from "../rolling.js";
 
 const WINDOW_MS = 20000;
@@ -23,15 +23,9 @@ export class ImuPanel {
   }
 
   draw(nowMs) {
-    const { ctx, width, height, resized } = fitCanvas(this.canvas);
-    if (!this.dirty && !resized) return;
-    this.dirty = false;
-    ctx.fillStyle = COLORS.background;
-    ctx.fillRect(0, 0, width, height);
-    if (this.rates.count === 0) {
-      drawWaiting(ctx, width, height, "/imu/data");
-      return;
-    }
+    const frame = beginPanelFrame(this, "/imu/data", this.rates.count > 0);
+    if (!frame) return;
+    const { ctx, width, height } = frame;
     const half = height / 2;
     plot(ctx, this.rates, { x: 0, y: 0, w: width, h: half - 2 }, nowMs, "angular rate [rad/s]");
     plot(ctx, this.accels, { x: 0, y: half + 2, w: width, h: half - 2 }, nowMs, "acceleration [m/s²] (z − g)");

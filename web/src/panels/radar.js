@@ -3,7 +3,7 @@
 // the sensor, bow up, with the CFAR detections of /nav/radar_detections on top.
 // Each sweep is painted through a pixel -> cell lookup table built once per geometry, so a new
 // image costs one pass over a small square raster, not one path per cell.
-import { COLORS, drawWaiting, fitCanvas } from "../canvas.js";
+import { beginPanelFrame, COLORS } from "../canvas.js";
 import { stampMs } from "../rosmsg.js";
 
 const RASTER_PX = 256; // side of the polar -> Cartesian raster, scaled up when drawn
@@ -38,15 +38,9 @@ export class RadarPanel {
   }
 
   draw() {
-    const { ctx, width, height, resized } = fitCanvas(this.canvas);
-    if (!this.dirty && !resized) return;
-    this.dirty = false;
-    ctx.fillStyle = COLORS.background;
-    ctx.fillRect(0, 0, width, height);
-    if (!this.sweep) {
-      drawWaiting(ctx, width, height, "/radar/image");
-      return;
-    }
+    const frame = beginPanelFrame(this, "/radar/image", Boolean(this.sweep));
+    if (!frame) return;
+    const { ctx, width, height } = frame;
     const radiusPx = Math.max(10, Math.min(width, height) / 2 - 14);
     const view = { cx: width / 2, cy: height / 2 + 6, scale: radiusPx / this.sweep.rangeMaxM };
     ctx.imageSmoothingEnabled = true;
