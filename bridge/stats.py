@@ -9,7 +9,6 @@ and once a second publishes its spans and stats into its own graph as an interna
 
 from __future__ import annotations
 
-import asyncio
 import logging
 import time
 from collections.abc import Callable
@@ -35,6 +34,7 @@ from schemas.tracing import (
     ResourceSampler,
     process_stats_msg,
     span_array_msg,
+    telemetry_ticks,
 )
 
 if TYPE_CHECKING:
@@ -163,14 +163,8 @@ class BridgeTelemetry:
         """Publish spans every `trace_period_s` and stats every `period_s` until cancelled;
         `apply` carries out the effects."""
         apply(self.clients_changed())
-        step_s = min(trace_period_s, period_s)
-        ticks_per_stats = max(1, round(period_s / step_s))
-        tick = 0
-        while True:
-            await asyncio.sleep(step_s)
-            tick += 1
+        async for with_stats in telemetry_ticks(period_s, trace_period_s):
             try:
-                apply(self.publish_once() if tick % ticks_per_stats == 0
-                      else self.publish_spans())
+                apply(self.publish_once() if with_stats else self.publish_spans())
             except Exception:  # telemetry must never take the bridge down
                 log.exception("publishing the bridge's telemetry failed")

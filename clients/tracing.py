@@ -34,6 +34,7 @@ from schemas.tracing import (
     is_traced,
     process_stats_msg,
     span_array_msg,
+    telemetry_ticks,
 )
 
 if TYPE_CHECKING:
@@ -147,14 +148,9 @@ async def telemetry(client: RosbridgeClient, tracer: Tracer,
             await each.publish(STATS_TOPIC, stats)
 
     async def loop() -> None:
-        step_s = min(trace_period_s, period_s)
-        ticks_per_stats = max(1, round(period_s / step_s))
-        tick = 0
-        while True:
-            await asyncio.sleep(step_s)
-            tick += 1
+        async for with_stats in telemetry_ticks(period_s, trace_period_s):
             try:
-                await (publish_once() if tick % ticks_per_stats == 0 else publish_spans())
+                await (publish_once() if with_stats else publish_spans())
             except Exception:  # telemetry must never end the process it observes
                 log.exception("%s: publishing telemetry failed", tracer.process)
 

@@ -7,10 +7,12 @@ stage; nothing here does I/O except reading this process's own /proc entries.
 
 from __future__ import annotations
 
+import asyncio
 import os
 import socket
 import time
 from collections import deque
+from collections.abc import AsyncIterator
 from typing import TYPE_CHECKING, Any
 
 from schemas.codec_cdr import _to_object
@@ -30,6 +32,7 @@ PUBLISH_PERIOD_S = 1.0  # ProcessStats go out about once a second (docs/tracing.
 # once (450 nested messages in the simulator) held an event loop for 3-5 ms on a busy core,
 # long enough to delay the IMU sample that came meanwhile; a quarter of it hides in the noise.
 TRACE_PERIOD_S = 0.25
+
 # Spans kept while nobody drains them: ~20 s of the whole stack's traffic (~500 spans/s);
 # past it the oldest are discarded and counted, so memory stays bounded.
 SPAN_CAPACITY = 10_000
@@ -143,3 +146,16 @@ def process_stats_msg(process: str, now_ns: int, cpu_percent: float, rss_bytes: 
             "messages_in": counters.get("messages_in", 0),
             "bytes_out": counters.get("bytes_out", 0), "bytes_in": counters.get("bytes_in", 0),
             "dropped": counters.get("dropped", 0)}
+
+
+async def telemetry_ticks(period_s: float = PUBLISH_PERIOD_S,
+                          trace_period_s: float = TRACE_PERIOD_S) -> AsyncIterator[bool]:
+    """Wake every `trace_period_s` (span batches) and say whether stats are due as well (every
+    `period_s`); runs until cancelled. The bridge and the client processes share the rhythm."""
+    step_s = min(trace_period_s, period_s)
+    ticks_per_stats = max(1, round(period_s / step_s))
+    tick = 0
+    while True:
+        await asyncio.sleep(step_s)
+        tick += 1
+        yield tick % ticks_per_stats == 0

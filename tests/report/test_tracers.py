@@ -16,6 +16,7 @@ from schemas.tracing import (
     cdr_size,
     header_stamp_ns,
     span_array_msg,
+    telemetry_ticks,
 )
 
 STAMPED = {"header": {"stamp": {"sec": 3, "nanosec": 5}, "frame_id": "imu"}}
@@ -101,3 +102,10 @@ def test_cdr_size_equals_the_serialized_length(registry, type_name, msg):
 def test_header_stamp_of_canonical_messages():
     assert header_stamp_ns(STAMPED) == STAMP_NS
     assert header_stamp_ns({"data": 1}) is None
+
+
+async def test_telemetry_ticks_carry_stats_every_period_and_spans_in_between():
+    ticks = telemetry_ticks(period_s=0.04, trace_period_s=0.01)
+    pattern = [await anext(ticks) for _ in range(8)]
+    await ticks.aclose()
+    assert pattern == [False, False, False, True] * 2
