@@ -16,6 +16,7 @@ from pydantic import BaseModel, ConfigDict, Field, model_validator
 ClusterMethod = Literal["dbscan", "kmeans", "birch"]
 LidarWorkerKind = Literal["process", "thread"]
 CfarKind = Literal["ca", "soca", "goca", "os"]
+CfarAxis = Literal["azimuth", "range"]
 
 
 class _Frozen(BaseModel):
@@ -81,17 +82,25 @@ class LidarConfig(_Frozen):
 
 
 class CfarConfig(_Frozen):
-    """Radar CFAR detector (thesis 2.5, table 4.2).
+    """Radar CFAR detector (thesis 2.5, table 4.2) and the grouping of its cells into targets.
 
     Thesis 4.1 reads table 4.2 as totals: "A total of 100 cells are taken into consideration
-    ... Ten cells that are five to the right and five to the left of the CUT are ignored", so
-    100 training and 10 guard cells are 50 and 5 on each side of the cell under test.
+    ... Ten cells that are five to the right and five to the left of the CUT are ignored": 50
+    training and 5 guard cells on each side of the cell under test. That window spans 111
+    cells, and the thesis radar has 25 range cells (table 4.1: 100 m of 4 m cells) and 72
+    beams (5 deg), so it fits neither axis. The window here runs along azimuth (the ring of 72
+    beams at the CUT's range, see navigation.cfar and docs/quality.md) with table 4.2's 5
+    guard cells per side and the 30 training cells per side that the ring holds beside them
+    (72 - 1 - 2 x 5 = 61). A window that does not fit the image is an error naming these
+    fields, not a silently smaller window.
     """
 
     detector: CfarKind = "soca"  # thesis 3.5.3 uses SOCA-CFAR
-    training_cells_per_side: int = Field(
-        default=50, ge=1
-    )  # thesis table 4.2: 100 training in total
+    # "azimuth": reference cells in the neighbouring beams at the same range (wraps around);
+    # "range": along the beam, one-sided near the row ends.
+    axis: CfarAxis = "azimuth"
+    # table 4.2 has 100 in total; 30 per side is what a ring of 72 beams holds (see above)
+    training_cells_per_side: int = Field(default=30, ge=1)
     guard_cells_per_side: int = Field(default=5, ge=0)  # thesis table 4.2: 10 guard in total
     false_alarm_rate: float = Field(default=0.1, gt=0.0, lt=1.0)  # thesis table 4.2
     # OS-CFAR order k among the 2 * training_cells_per_side reference cells; None picks
