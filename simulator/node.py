@@ -55,6 +55,8 @@ TOPICS = {
 }
 TF_STATIC = ("/tf_static", "tf2_msgs/msg/TFMessage")
 GROUND_TRUTH = ("/sim/ground_truth", MARKERS_TYPE)
+# The effective configuration as JSON (latched), so a recording or a report knows what ran.
+SIM_CONFIG = ("/sim/config", "std_msgs/msg/String")
 TRUTH_TOPICS = {"lidar": "/sim/ground_truth/lidar", "radar": "/sim/ground_truth/radar"}
 COMMAND = ("/cmd_wrench", "geometry_msgs/msg/Wrench")
 HEAVY_SENSORS = ("lidar", "radar", "camera")
@@ -143,6 +145,8 @@ class SimulatorNode:
             await self._client_for(name).advertise(topic, type_name, latest_only=True)
         await self._client.advertise(*TF_STATIC, latch=True)
         await self._client.publish(TF_STATIC[0], static_transforms(self.cfg, self._clock_ns()))
+        await self._client.advertise(*SIM_CONFIG, latch=True)
+        await self._client.publish(SIM_CONFIG[0], {"data": self.cfg.model_dump_json()})
         if self.cfg.ground_truth.enabled:
             await self._advertise_truth()
         commands = await self._realtime.subscribe(*COMMAND, maxsize=1)
