@@ -1,7 +1,8 @@
 """Configuration of the navigation service: frozen pydantic models, loadable from TOML.
 
 Defaults are the thesis values (tables 4.2, 4.3, 4.4, 4.6) where the thesis gives one; the
-remaining values are ours and their comment says why. ``extra="forbid"`` makes a misspelt
+remaining values are ours and their comment says why. config/nav.toml lists every field with
+its default and source. ``extra="forbid"`` makes a misspelt
 field fail loudly with its name instead of being silently ignored.
 """
 
@@ -43,7 +44,7 @@ class LidarConfig(_Frozen):
     """LIDAR obstacle extraction (thesis 2.4, 3.5.3, tables 4.3 and 4.4)."""
 
     range_min_m: float = 1.5  # drops returns from the own hull and mast
-    range_max_m: float = 100.0  # thesis 4.1: obstacle detection of interest within ~100 m
+    range_max_m: float = 100.0  # thesis 3.3.1: the Velodyne Puck's range, up to 100 m
     ground: GroundConfig = GroundConfig()
     # Voxel edge; 0 disables. 0.2 m keeps the same 54 clusters as the full cloud in
     # performance-measurements §2(e) at a fifth of the DBSCAN time.
@@ -138,7 +139,7 @@ class ImuConfig(_Frozen):
 
 
 class FusionConfig(_Frozen):
-    """Vessel-centred obstacle grid from LIDAR boxes and radar detections (thesis fig. 21)."""
+    """Vessel-centred obstacle grid from LIDAR boxes and radar targets (thesis figure 3.21)."""
 
     frame_id: str = "base_link"
     size_m: float = Field(default=200.0, gt=0.0)  # square side; covers the 100 m sensor ranges
@@ -146,8 +147,9 @@ class FusionConfig(_Frozen):
     publish_rate_hz: float = 2.0  # the LIDAR rate, thesis 4.1
     lidar_offset_xy_m: tuple[float, float] = (0.0, 0.0)  # sensor origins in the vessel frame
     radar_offset_xy_m: tuple[float, float] = (0.0, 0.0)
-    lidar_range_m: float = 100.0  # coverage: cells beyond every sensor's range are unknown
-    radar_range_m: float = 200.0
+    # coverage: cells beyond every sensor's range are unknown
+    lidar_range_m: float = 100.0  # thesis 3.3.1: the Velodyne Puck's 100 m
+    radar_range_m: float = 100.0  # thesis 4.1: the virtual radar's ~100 m
     # Boxes wholly above this height (bridges, overhead lines) are no obstacle to the hull.
     max_obstacle_z_m: float = 20.0
 

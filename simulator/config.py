@@ -2,7 +2,8 @@
 
 Every model forbids unknown fields, so a typo in a TOML file names the offending field instead
 of being silently ignored. Angles in configuration are degrees (as the thesis tables give them);
-the numeric core converts once when it builds its ray tables.
+the numeric core converts once when it builds its ray tables. config/sim.toml lists every
+field with its default and source.
 """
 
 from __future__ import annotations
@@ -97,8 +98,8 @@ class RadarConfig(_Frozen):
     range_min_m: Annotated[float, Field(ge=0)] = 0.0
     # thesis 4.1: detection limited to about 100 m
     range_max_m: Annotated[float, Field(gt=0)] = 100.0
-    rate_hz: Annotated[float, Field(gt=0)] = 2.0
-    # Rayleigh sigma added per cell; 0 = no clutter
+    rate_hz: Annotated[float, Field(gt=0)] = 2.0  # thesis 4.2: every sensor at 2 Hz but the IMU
+    # Rayleigh sigma added per cell; 0 = no clutter (thesis 3.5.3: no wakes, no clutter)
     clutter_scale: Annotated[float, Field(ge=0)] = 0.0
     frame_id: str = "radar"
     mount: MountConfig = MountConfig(z_m=3.5)
@@ -112,7 +113,7 @@ class CameraConfig(_Frozen):
     # Unity's default camera field of view
     vertical_fov_deg: Annotated[float, Field(gt=0, lt=180)] = 60.0
     jpeg_quality: Annotated[int, Field(ge=1, le=100)] = 85
-    rate_hz: Annotated[float, Field(gt=0)] = 2.0
+    rate_hz: Annotated[float, Field(gt=0)] = 2.0  # thesis 4.2: every sensor at 2 Hz but the IMU
     max_range_m: Annotated[float, Field(gt=0)] = 3000.0
     sun_direction_xyz: tuple[float, float, float] = (0.4, 0.3, 0.85)  # map frame, normalised later
     ambient: Annotated[float, Field(ge=0, le=1)] = 0.35
@@ -168,7 +169,7 @@ class VesselConfig(_Frozen):
     d_r: Annotated[float, Field(ge=0)] = 3000.0  # N m s/rad
     d_r2: Annotated[float, Field(ge=0)] = 2000.0
     d_r3: Annotated[float, Field(ge=0)] = 0.0
-    # fixed physics step (Unity FixedUpdate is 50 Hz)
+    # fixed physics step (thesis 4.2: Unity's default physics update of 20 ms)
     physics_rate_hz: Annotated[float, Field(gt=0)] = 50.0
     # commands are clipped to the actuators
     max_surge_force_n: Annotated[float, Field(gt=0)] = 4000.0
