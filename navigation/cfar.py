@@ -88,9 +88,14 @@ class CfarDetector:
         self.check_fits(*power.shape)
         if self.axis == "range":
             return self._row_threshold(power)
-        pad = self.n_side + self.n_guard  # the ring: wrap the beams, then cut the pad off
+        if self.kind != "os":
+            lead, lag = ring_side_sums(power, self.n_side, self.n_guard)
+            noise = _COMBINE_SIDES[self.kind](lead / self.n_side, lag / self.n_side)
+            return (self.factor * noise).astype(np.float32)
+        pad = self.n_side + self.n_guard  # OS: wrap the beams, rank, cut the pad off
         rows = np.pad(power.T, ((0, 0), (pad, pad)), mode="wrap")
-        return np.ascontiguousarray(self._row_threshold(rows)[:, pad:-pad].T)
+        noise, _, _ = self._os_estimates(rows, edges=False)
+        return np.ascontiguousarray((self.factor * noise[:, pad:-pad]).T, dtype=np.float32)
 
     def detect(self, power: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Cells whose power exceeds the threshold: mask (beams, cells) bool, threshold."""
@@ -112,8 +117,10 @@ class CfarDetector:
         out[np.isnan(out)] = np.inf
         return out.astype(np.float32)
 
-    def _os_estimates(self, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Order statistics: rank-th of both sides, edge_rank-th of each side alone."""
+    def _os_estimates(self, rows: np.ndarray,
+                      edges: bool = True) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Order statistics: rank-th of both sides, edge_rank-th of each side alone (unless
+        ``edges`` is False: wrapped rows have no ends)."""
         n, g = self.n_side, self.n_guard
         count, cells = rows.shape
         both = np.full((count, cells), np.nan)
@@ -124,7 +131,7 @@ class CfarDetector:
             windows = sliding_window_view(rows, span, axis=1)
             training = np.concatenate([windows[..., :n], windows[..., n + 2 * g + 1 :]], axis=-1)
             both[:, n + g : cells - n - g] = _kth_smallest(training, self.rank)
-        if cells >= n + g + 1:
+        if edges and cells >= n + g + 1:
             # Only cells missing the other side need a one-sided estimate.
             sides = sliding_window_view(rows, n, axis=1)  # sides[:, s] covers s .. s+n-1
             lag_cells = np.arange(min(n + g, cells - n - g))  # no complete lead side
@@ -149,6 +156,30 @@ _COMBINE_SIDES: dict[str, Callable[[np.ndarray, np.ndarray], np.ndarray]] = {
 def _kth_smallest(windows: np.ndarray, rank: int) -> np.ndarray:
     """rank-th smallest (1-based) along the last axis: (..., w) -> (...)."""
     return np.partition(windows, rank - 1, axis=-1)[..., rank - 1]
+
+
+def ring_side_sums(power: np.ndarray, n_side: int,
+                   n_guard: int) -> tuple[np.ndarray, np.ndarray]:
+    """Sums of the training windows of every cell along the ring of beams (axis 0, wrapping).
+
+    power : (beams, cells) -> lead, lag : (beams, cells) float64. Lead covers beams
+    i-g-n .. i-g-1, lag i+g+1 .. i+g+n, both modulo the beam count; one cumulative sum over
+    the beams, and a window that runs past the last beam adds the part from beam 0 on.
+    """
+    beams = power.shape[0]
+    csum = np.zeros((beams + 1, power.shape[1]), dtype=np.float64)
+    np.cumsum(power, axis=0, out=csum[1:])
+    index = np.arange(beams)
+
+    def window(first: np.ndarray) -> np.ndarray:
+        start = first % beams
+        stop = start + n_side
+        sums = csum[np.minimum(stop, beams)] - csum[start]
+        wraps = stop > beams
+        sums[wraps] += csum[stop[wraps] - beams]
+        return sums
+
+    return window(index - n_guard - n_side), window(index + n_guard + 1)
 
 
 def side_sums(power: np.ndarray, n_side: int, n_guard: int) -> tuple[np.ndarray, np.ndarray]:

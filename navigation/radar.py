@@ -177,19 +177,26 @@ def detection_array_msg(
     found: RadarDetections, targets: RadarTargets, stamp_ns: int, frame_id: str,
     detector: CfarDetector,
 ) -> dict[str, Any]:
-    """Canonical ``riverbridge_msgs/msg/RadarDetectionArray``."""
-    names = ("range_m", "azimuth_rad", "x_m", "y_m", "power", "threshold", "beam", "cell",
-             "target")
-    columns = [getattr(found, name).tolist() for name in names]
-    target_names = ("range_m", "azimuth_rad", "x_m", "y_m", "power", "peak_power",
-                    "peak_beam", "peak_cell", "num_cells")
-    target_columns = [getattr(targets, name).tolist() for name in target_names]
+    """Canonical ``riverbridge_msgs/msg/RadarDetectionArray`` (dict literals per item: twice
+    as fast as ``dict(zip(...))`` for the thousand items of a cluttered sweep)."""
+    columns = (found.range_m, found.azimuth_rad, found.x_m, found.y_m, found.power,
+               found.threshold, found.beam, found.cell, found.target)
+    target_columns = (targets.range_m, targets.azimuth_rad, targets.x_m, targets.y_m,
+                      targets.power, targets.peak_power, targets.peak_beam, targets.peak_cell,
+                      targets.num_cells)
     return {
         "header": header_msg(stamp_ns, frame_id),
         "detector": detector.kind,
         "false_alarm_rate": f32(detector.false_alarm_rate),
         "axis": detector.axis,
-        "detections": [dict(zip(names, row, strict=True)) for row in zip(*columns, strict=True)],
-        "targets": [dict(zip(target_names, row, strict=True))
-                    for row in zip(*target_columns, strict=True)],
+        "detections": [
+            {"range_m": r, "azimuth_rad": a, "x_m": x, "y_m": y, "power": p, "threshold": t,
+             "beam": b, "cell": c, "target": k}
+            for r, a, x, y, p, t, b, c, k in zip(*(col.tolist() for col in columns),
+                                                 strict=True)],
+        "targets": [
+            {"range_m": r, "azimuth_rad": a, "x_m": x, "y_m": y, "power": p, "peak_power": q,
+             "peak_beam": b, "peak_cell": c, "num_cells": n}
+            for r, a, x, y, p, q, b, c, n in zip(*(col.tolist() for col in target_columns),
+                                                 strict=True)],
     }

@@ -24,7 +24,7 @@ from simulator.scene import Scene
 
 class LidarScan(NamedTuple):
     """points : (n, 4) float32 (x, y, z sensor frame, intensity); source : (n,) int32, what
-    each point hit (object id, or LAND / WATER; `simulator.objects`)."""
+    each point hit (object id, or LAND / WATER; `simulator.objects`), empty unless asked."""
 
     points: np.ndarray
     source: np.ndarray
@@ -79,15 +79,19 @@ class Lidar:
         returns points : (n, 4) float32 (x, y, z in the sensor frame, metres; intensity 0..1),
         hits only, ordered by ray; rays ending on no-return surfaces are dropped.
         """
-        return self.scan_with_sources(scene, pose).points
+        return self._scan(scene, pose, with_sources=False).points
 
     def scan_with_sources(self, scene: Scene, pose: Pose2D) -> LidarScan:
-        """`scan`, plus what every point hit (for the ground truth)."""
+        """`scan`, plus what every point hit (for the ground truth; one more gather)."""
+        return self._scan(scene, pose, with_sources=True)
+
+    def _scan(self, scene: Scene, pose: Pose2D, with_sources: bool) -> LidarScan:
         origin, rotation = sensor_pose_in_map(pose, self.cfg.mount, scene.water_level_m)
         rotate_rows(self.directions_sensor, rotation, self._directions_map)
         fill_origins(self._origins, origin)
         chunks = self._caster.map_chunks(scene, self._origins, self._directions_map,
-                                         self.cfg.range_max_m, partial(self._points, scene))
+                                         self.cfg.range_max_m,
+                                         partial(self._points, scene, with_sources))
         if len(chunks) > 1:
             points = np.concatenate([c.points for c in chunks])
             source = np.concatenate([c.source for c in chunks])
@@ -99,29 +103,30 @@ class Lidar:
             points[:, :3] *= ((range_m + noise_m) / range_m)[:, None]
         return LidarScan(points, source)
 
-    def _points(self, scene: Scene, chunk: slice, range_m: np.ndarray,
+    def _points(self, scene: Scene, with_sources: bool, chunk: slice, range_m: np.ndarray,
                 prim: np.ndarray) -> LidarScan:
-        """The returning rays of one chunk (runs on a worker thread)."""
+        """The returning rays of one chunk (runs on a worker thread); sources only if asked."""
         hit = np.flatnonzero(prim >= 0)
         faces = np.take(prim, hit)
         intensity = np.take(scene.lidar_reflectivity, faces)
         ranges = np.take(range_m, hit)
         keep = (intensity > 0) & (ranges >= self.cfg.range_min_m)
-        source = np.take(scene.face_source, faces)
         if self._specular:
-            keep &= self._water_returns(scene, chunk, hit, faces, source)
-        hit, intensity, ranges, source = hit[keep], intensity[keep], ranges[keep], source[keep]
+            keep &= self._water_returns(scene, chunk, hit, faces)
+        hit, intensity, ranges = hit[keep], intensity[keep], ranges[keep]
         points = np.empty((len(hit), 4), np.float32)
         directions = np.take(self.directions_sensor[chunk], hit, axis=0)
         np.multiply(directions, ranges[:, None], out=points[:, :3])
         points[:, 3] = intensity
+        source = (np.take(scene.face_source, faces[keep]) if with_sources
+                  else np.empty(0, np.int32))
         return LidarScan(points, source)
 
-    def _water_returns(self, scene: Scene, chunk: slice, hit: np.ndarray, faces: np.ndarray,
-                       source: np.ndarray) -> np.ndarray:
+    def _water_returns(self, scene: Scene, chunk: slice, hit: np.ndarray,
+                       faces: np.ndarray) -> np.ndarray:
         """Specular water: (k,) bool, False for water hits further than the maximum incidence
         from the surface normal (the beam is mirrored away), True for everything else."""
-        water = np.flatnonzero(source == WATER)
+        water = np.flatnonzero(np.take(scene.face_source, faces) == WATER)
         keep = np.ones(len(hit), bool)
         if water.size:
             directions = np.take(self._directions_map[chunk], hit[water], axis=0)

@@ -8,7 +8,7 @@ import pydantic
 import pytest
 from nav_scenes import radar_noise_image
 
-from navigation.cfar import CfarDetector, CfarWindowError, side_sums
+from navigation.cfar import CfarDetector, CfarWindowError, ring_side_sums, side_sums
 from navigation.cfar_pfa import ca_factor, ca_pfa, goca_pfa, os_pfa, soca_pfa
 from navigation.config import CfarConfig
 
@@ -80,6 +80,16 @@ def test_side_sums_match_a_direct_sum():
         assert lead[1, i] == pytest.approx(image[1, i - 6 : i - 2].sum(), rel=1e-6)
         assert lag[1, i] == pytest.approx(image[1, i + 3 : i + 7].sum(), rel=1e-6)
     assert np.isnan(lead[:, :6]).all() and np.isnan(lag[:, -6:]).all()
+
+
+def test_ring_side_sums_match_a_direct_sum_around_the_ring():
+    image = radar_noise_image(10, 3, seed=6)
+    lead, lag = ring_side_sums(image, 3, 1)
+    for beam in (0, 1, 5, 9):
+        lead_beams = [(beam - 1 - k) % 10 for k in range(1, 4)]
+        lag_beams = [(beam + 1 + k) % 10 for k in range(1, 4)]
+        np.testing.assert_allclose(lead[beam], image[lead_beams].sum(axis=0), rtol=1e-6)
+        np.testing.assert_allclose(lag[beam], image[lag_beams].sum(axis=0), rtol=1e-6)
 
 
 def test_the_azimuth_window_wraps_around_the_ring():
