@@ -190,3 +190,16 @@ def test_tables_render_every_stage_and_the_comparison():
     assert "cbor" in header and "json" in header and "thesis/cbor" in header
     assert "transport mean ms" in comparison and "table A.1 5b" in comparison
     assert "network overhead" in comparison and "5.56x" in comparison
+
+
+def test_plots_are_written_per_run_and_topic(tmp_path):
+    from clients.report import by_topic, stage_values
+    from clients.report_plots import write_plots
+
+    spans = [s for k in range(5) for s in path_spans(10**18 + k * 500 * MS)]
+    values = {t: stage_values(items) for t, items in by_topic(journeys(spans)).items()}
+    run = {"encoding": "cbor", "topics": summarise(spans, 2.5), "samples": {}, "_values": values}
+    written = write_plots([run, {**run, "profile": "thesis"}], tmp_path)
+    names = sorted(p.name for p in written)
+    assert names == ["bytes.png", "cbor_lidar_points.png", "thesis-cbor_lidar_points.png"]
+    assert all(p.stat().st_size > 1000 for p in written)
