@@ -62,6 +62,10 @@ COMMAND = ("/cmd_wrench", "geometry_msgs/msg/Wrench")
 HEAVY_SENSORS = ("lidar", "radar", "camera")
 STATS_PERIOD_S = 10.0
 MAX_CATCH_UP_STEPS = 25  # after a long stall, jump ahead rather than spin through the backlog
+# The truth of a scan goes out this long after the scan: not while the bridge is still handing
+# the scan on (its loop would decode and fan out the truth in the scan's way); it is stamped
+# with the scan's capture time, so a judge pairs it all the same.
+TRUTH_DELAY_S = 0.1
 # A sensor tick's work: its message first, then (topic, message) pairs of ground truth.
 Outputs = list[Any]
 
@@ -135,6 +139,7 @@ class SimulatorNode:
         self.gnss = Gnss(cfg.gnss, seed=cfg.seed + 4)
         self.timings = {name: GenerationTimes() for name in (*HEAVY_SENSORS, "physics")}
         self.physics_lateness = GenerationTimes()  # ms each physics tick started behind schedule
+        self._truth_tasks: set[asyncio.Task[None]] = set()
         self._executors = {name: ThreadPoolExecutor(1, thread_name_prefix=f"sim-{name}",
                                                     initializer=background_priority)
                            for name in HEAVY_SENSORS}
@@ -163,9 +168,9 @@ class SimulatorNode:
         try:
             await stop.wait()
         finally:
-            for task in tasks:
+            for task in [*tasks, *self._truth_tasks]:
                 task.cancel()
-            for task in tasks:
+            for task in [*tasks, *self._truth_tasks]:
                 with contextlib.suppress(asyncio.CancelledError):
                     await task
             for executor in self._executors.values():
@@ -234,7 +239,7 @@ class SimulatorNode:
 
     def _sensor_tick(self, name: str, work: Callable[[Any, int], Outputs]):
         """A tick that captures pose and stamp now, generates on the sensor's thread, publishes
-        the sensor's message, then any ground truth that came with it."""
+        the sensor's message, and any ground truth that came with it TRUTH_DELAY_S later."""
         loop = asyncio.get_running_loop()
 
         async def tick() -> None:
@@ -244,10 +249,17 @@ class SimulatorNode:
             self.timings[name].record((time.perf_counter() - started) * 1e3)
             self._generated(TOPICS[name][0], stamp_ns)
             await self._client.publish(TOPICS[name][0], msg)
-            for topic, truth_msg in truth:
-                await self._client.publish(topic, truth_msg)
+            if truth:
+                task = asyncio.create_task(self._publish_truth(truth))
+                self._truth_tasks.add(task)
+                task.add_done_callback(self._truth_tasks.discard)
 
         return tick
+
+    async def _publish_truth(self, truth: Outputs) -> None:
+        await asyncio.sleep(TRUTH_DELAY_S)
+        for topic, msg in truth:
+            await self._client.publish(topic, msg)
 
     def _generated(self, topic: str, stamp_ns: int) -> None:
         """Trace `generate`: capture (the stamp) → message ready (now)."""

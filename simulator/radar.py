@@ -113,21 +113,27 @@ class Radar:
 
     def _sources(self, scene: Scene, flat: np.ndarray,
                  faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Per cell the source with the largest summed reflectance: one bincount over
-        (cell, source) pairs, sources numbered objects 0..k-1, then land, then water. Also
-        the rays per object."""
+        """Per cell the source with the largest summed reflectance, and the rays per object.
+
+        Sources are numbered objects 0..k-1, then land, then water; the (cell, source) pairs
+        of the sweep's few thousand rays are summed with one unique + bincount, and each
+        cell keeps its largest pair (a lexsort), so no (cells x sources) table is built.
+        """
         geo = self.geometry
         k = len(scene.objects)
         source = scene.face_source[faces].astype(np.int64)
         object_rays = np.bincount(source[source >= 0], minlength=k)[:k]
         column = np.where(source >= 0, source, np.where(source == LAND, k, k + 1))
-        cells = geo.num_beams * geo.num_cells
-        sums = np.bincount(flat * (k + 2) + column, weights=scene.radar_reflectance[faces],
-                           minlength=cells * (k + 2)).reshape(cells, k + 2)
-        best = np.argmax(sums, axis=1)
-        named = np.where(best < k, best, np.where(best == k, LAND, WATER))
-        named[sums.max(axis=1) <= 0.0] = NO_RETURN
-        return named.astype(np.int32).reshape(geo.num_beams, geo.num_cells), object_rays
+        pairs, inverse = np.unique(flat * (k + 2) + column, return_inverse=True)
+        sums = np.bincount(inverse.reshape(-1), weights=scene.radar_reflectance[faces])
+        cell, column = np.divmod(pairs, k + 2)
+        order = np.lexsort((-sums, cell))  # by cell, the largest sum first
+        first = order[np.r_[True, cell[order][1:] != cell[order][:-1]]] if len(order) else order
+        first = first[sums[first] > 0.0]
+        named = np.full(geo.num_beams * geo.num_cells, NO_RETURN, np.int32)
+        best = column[first]
+        named[cell[first]] = np.where(best < k, best, np.where(best == k, LAND, WATER))
+        return named.reshape(geo.num_beams, geo.num_cells), object_rays
 
     def message(self, image: np.ndarray, stamp_ns: int) -> dict:
         """riverbridge_msgs/msg/RadarImage of a sweep, stamped with its capture time."""
