@@ -268,8 +268,9 @@ async def run_bridge(config: BridgeConfig,
     try:
         if config.dds:  # imported only when asked: Cyclone DDS loads a C library
             from bridge.dds.mirror import DdsMirror
-            mirror = DdsMirror(server)
-            await mirror.start()
+            joining = DdsMirror(server)
+            await joining.start()
+            mirror = joining
         yield RunningBridge(config.host, server.port, server, mirror)
     finally:
         if mirror is not None:

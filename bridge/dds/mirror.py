@@ -35,7 +35,7 @@ from bridge.dds.participant import DdsParticipant, Pump
 from bridge.dds.qos import QosError, QosProfile, reader_profile, strongest, writer_profile
 from bridge.dds.service_mirror import ServiceMirror
 from bridge.dds.topic_mirror import Arrival, TopicMirror, Wanted
-from bridge.errors import BridgeError
+from bridge.errors import BridgeError, DdsStartError
 from schemas.errors import SchemaError
 
 if TYPE_CHECKING:
@@ -47,8 +47,6 @@ if TYPE_CHECKING:
 logger = logging.getLogger("bridge.dds")
 
 RECONCILE_S = 0.1  # how late a new advertisement or subscription reaches DDS at most
-# Messages of one topic waiting for the writer thread before the oldest is dropped.
-OUTBOX_PER_STREAM = 4
 
 
 class DdsMirror:
@@ -71,10 +69,15 @@ class DdsMirror:
         loop = self._loop = asyncio.get_running_loop()
         settings = CycloneSettings(self.config.dds_interface, self.config.dds_peers,
                                    self.config.dds_multicast)
-        self.participant = DdsParticipant(self.config.dds_domain, settings)
+        try:
+            self.participant = DdsParticipant(self.config.dds_domain, settings)
+        except Exception as exc:  # Cyclone says little more than "non-specific error"
+            raise DdsStartError(
+                f"cannot join DDS domain {self.config.dds_domain} on interface "
+                f"{settings.interface!r} (does it exist and have an address?): {exc}") from exc
         node = self.config.dds_node or f"riverbridge_{self.participant.short_id()}"
         self.node = node if node.startswith("/") else "/" + node
-        self.outbox = Outbox(OUTBOX_PER_STREAM)
+        self.outbox = Outbox()
         self.writer = WriterThread(self.outbox)
         self.pump = Pump(self.participant)
         to_loop = loop.call_soon_threadsafe

@@ -2,9 +2,10 @@
 
 The loop only queues a closure (serialize to CDR, then `dds_write`); the writer thread runs
 them in order. A reliable DDS write may wait for acknowledgements, and a 5.5 MB CDR encode
-takes milliseconds: neither may happen on the loop. Each stream (a topic's writer, a
-service's reply writer) may hold `limit` waiting items; past that its oldest is dropped and
-counted, like the websocket send queues, so a slow domain costs memory for a few messages only.
+takes milliseconds: neither may happen on the loop. The queue is bounded per stream (a
+topic's writer, a service's reply writer) by count and by payload bytes, so a burst of small
+messages waits while a slow domain costs memory for a few scans only: past either bound the
+stream's oldest job is dropped and counted, like the websocket send queues do.
 """
 
 from __future__ import annotations
@@ -13,36 +14,53 @@ import logging
 import threading
 from collections import Counter, deque
 from collections.abc import Callable, Hashable
+from dataclasses import dataclass
 
 logger = logging.getLogger("bridge.dds")
 
 Job = Callable[[], None]
+# A stream may hold this many waiting jobs ...
+MAX_ITEMS = 256
+# ... and this many payload bytes (three 5.5 MB scans); its newest job is always kept.
+MAX_BYTES = 16 * 1024 * 1024
+
+
+@dataclass
+class _Stream:
+    items: int = 0
+    size: int = 0
 
 
 class Outbox:
-    """A FIFO of jobs, at most `limit` per stream key (oldest of that key dropped)."""
+    """A FIFO of jobs, bounded per stream key (oldest of that key dropped)."""
 
-    def __init__(self, limit: int) -> None:
-        self.limit = limit
-        self._items: deque[tuple[Hashable, Job]] = deque()
-        self._per_key: Counter[Hashable] = Counter()
+    def __init__(self, max_items: int = MAX_ITEMS, max_bytes: int = MAX_BYTES) -> None:
+        self.max_items = max_items
+        self.max_bytes = max_bytes
+        self._items: deque[tuple[Hashable, Job, int]] = deque()
+        self._streams: dict[Hashable, _Stream] = {}
         self.dropped: Counter[Hashable] = Counter()
         self._ready = threading.Condition()
         self._closed = False
 
-    def put(self, key: Hashable, job: Job) -> None:
+    def put(self, key: Hashable, job: Job, size: int = 0) -> None:
+        """Queue `job` (carrying about `size` payload bytes) on stream `key`."""
         with self._ready:
-            if self._per_key[key] >= self.limit:
-                self._drop_oldest(key)
-            self._items.append((key, job))
-            self._per_key[key] += 1
+            stream = self._streams.setdefault(key, _Stream())
+            while stream.items and (stream.items >= self.max_items
+                                    or stream.size + size > self.max_bytes):
+                self._drop_oldest(key, stream)
+            self._items.append((key, job, size))
+            stream.items += 1
+            stream.size += size
             self._ready.notify()
 
-    def _drop_oldest(self, key: Hashable) -> None:
-        for index, (item_key, _) in enumerate(self._items):
+    def _drop_oldest(self, key: Hashable, stream: _Stream) -> None:
+        for index, (item_key, _, size) in enumerate(self._items):
             if item_key == key:
                 del self._items[index]
-                self._per_key[key] -= 1
+                stream.items -= 1
+                stream.size -= size
                 self.dropped[key] += 1
                 return
 
@@ -53,16 +71,19 @@ class Outbox:
                 self._ready.wait(timeout_s)
             if self._closed or not self._items:
                 return None
-            key, job = self._items.popleft()
-            self._per_key[key] -= 1
-            if not self._per_key[key]:
-                del self._per_key[key]
+            key, job, size = self._items.popleft()
+            stream = self._streams[key]
+            stream.items -= 1
+            stream.size -= size
+            if not stream.items:
+                del self._streams[key]
             return job
 
     def close(self) -> None:
         with self._ready:
             self._closed = True
             self._items.clear()
+            self._streams.clear()
             self._ready.notify_all()
 
     @property

@@ -79,13 +79,18 @@ def _choice(qos: Mapping[str, Any], key: str, table: Mapping[str, bool], default
     return table[value]
 
 
+# A reader's history is the bridge's own buffer between Cyclone's receive thread and the pump
+# thread (it is not part of QoS matching): deep enough that a burst of small messages
+# arriving while the pump waits for the GIL is not overwritten.
+READER_DEPTH = 64
+
+
 def reader_profile(writers: Iterable[QosProfile]) -> QosProfile:
-    """A reader profile that matches every writer in `writers` (ROS 2's default if none)."""
+    """A reader profile that matches every writer in `writers` (reliable, volatile if none)."""
     known = list(writers)
-    if not known:
-        return DEFAULT
     return QosProfile(reliable=all(w.reliable for w in known),
-                      transient_local=all(w.transient_local for w in known), depth=10)
+                      transient_local=bool(known) and all(w.transient_local for w in known),
+                      depth=READER_DEPTH)
 
 
 def strongest(profiles: Iterable[QosProfile]) -> QosProfile:

@@ -160,7 +160,8 @@ class TopicMirror:
         writer = self.writers.get(message.topic)
         if writer is None or writer.wanted.type_name != message.type_name:
             return False
-        self._outbox.put(("topic", message.topic), lambda: self._write(writer.raw, message))
+        self._outbox.put(("topic", message.topic), lambda: self._write(writer.raw, message),
+                         message.size_hint)
         return True
 
     def _write(self, raw: RawWriter, message: TopicMessage) -> None:
