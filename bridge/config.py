@@ -59,3 +59,6 @@ class BridgeConfig(BaseModel):
     dds_multicast: Literal["false", "spdp", "true"] = "false"
     # The bridge's ROS 2 node on the domain; "" = /riverbridge_<8 hex digits of its GUID>.
     dds_node: str = Field(default="", pattern=r"^(/?[A-Za-z_][A-Za-z0-9_]*)*$")
+    # Large-sample tuning of Cyclone (socket buffers, writer history cache; bridge.dds
+    # .cyclone_xml); off only to measure what it buys (benchmarks/dds.py).
+    dds_tuned: bool = True

@@ -70,7 +70,8 @@ class DdsMirror:
         settings = CycloneSettings(self.config.dds_interface, self.config.dds_peers,
                                    self.config.dds_multicast)
         try:
-            self.participant = DdsParticipant(self.config.dds_domain, settings)
+            self.participant = DdsParticipant(self.config.dds_domain, settings,
+                                              self.config.dds_tuned)
         except Exception as exc:  # Cyclone says little more than "non-specific error"
             raise DdsStartError(
                 f"cannot join DDS domain {self.config.dds_domain} on interface "

@@ -69,6 +69,9 @@ def add_dds_options(parser: argparse.ArgumentParser, env: Mapping[str, str] | No
     group.add_argument("--dds-node", default="", metavar="NAME",
                        help="the bridge's ROS 2 node name on the domain "
                             "(default /riverbridge_<id>)")
+    group.add_argument("--dds-untuned", action="store_true",
+                       help="Cyclone's own socket buffers and writer cache limits instead of "
+                            "the bridge's large-sample settings (to measure them)")
     group.add_argument("--print-dds-config", action="store_true",
                        help="print the Cyclone DDS XML these options give (for CYCLONEDDS_URI "
                             "of ROS 2 nodes that should meet the bridge) and exit")
@@ -78,7 +81,7 @@ def dds_config_fields(args: argparse.Namespace) -> dict[str, Any]:
     """The BridgeConfig fields of the parsed DDS options."""
     return {"dds": args.dds, "dds_domain": args.domain, "dds_interface": args.dds_interface,
             "dds_peers": peers(args), "dds_multicast": args.dds_multicast,
-            "dds_node": args.dds_node}
+            "dds_node": args.dds_node, "dds_tuned": not args.dds_untuned}
 
 
 def peers(args: argparse.Namespace) -> tuple[str, ...]:
@@ -88,4 +91,4 @@ def peers(args: argparse.Namespace) -> tuple[str, ...]:
 def print_config(args: argparse.Namespace) -> str:
     """The XML for `--print-dds-config` (raises ValueError for a bad interface or peer)."""
     settings = CycloneSettings(args.dds_interface, peers(args), args.dds_multicast)
-    return cyclone_xml(settings)
+    return cyclone_xml(settings, tuned=not args.dds_untuned)

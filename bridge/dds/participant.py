@@ -196,9 +196,9 @@ class DdsParticipant:
     """One participant in domain `domain_id`, configured by `settings` (never Cyclone's
     defaults), with ROS 2's participant user data so ROS 2 tools list it."""
 
-    def __init__(self, domain_id: int, settings: CycloneSettings) -> None:
+    def __init__(self, domain_id: int, settings: CycloneSettings, tuned: bool = True) -> None:
         self.domain_id = domain_id
-        self._domain = DOMAINS.acquire(domain_id, cyclone_xml(settings))
+        self._domain = DOMAINS.acquire(domain_id, cyclone_xml(settings, tuned))
         try:
             self.participant = DomainParticipant(
                 domain_id, qos=Qos(Policy.Userdata(data=b"enclave=/;")))
