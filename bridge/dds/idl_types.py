@@ -32,8 +32,9 @@ PRIMITIVES: dict[str, Any] = {
     "float32": idl.float32, "float64": idl.float64, "string": str,
 }
 EMPTY_PLACEHOLDER = "structure_needs_at_least_one_member"
-# rmw_cyclonedds_cpp's cdds_request_header_t: the client's writer id, then the sequence number.
-REQUEST_HEADER_FIELDS = {"client_guid": idl.uint64, "sequence_number": idl.int64}
+# rmw_cyclonedds_cpp's cdds_request_header_t, under its member names (peers that send XTypes
+# type information compare them): the client's writer handle, then its sequence number.
+REQUEST_HEADER_FIELDS = {"guid": idl.uint64, "seq": idl.int64}
 
 
 class UnsupportedTypeError(ValueError):
@@ -64,6 +65,9 @@ class IdlTypes:
             return cached
         fields: dict[str, Any] = dict(REQUEST_HEADER_FIELDS) if with_request_header else {}
         for field in spec.fields:
+            if field.name in fields:
+                raise UnsupportedTypeError(f"{spec.name} has a field {field.name} that clashes "
+                                           "with the request header")
             fields[field.name] = self._field_type(field)
         if not spec.fields:
             fields[EMPTY_PLACEHOLDER] = idl.uint8

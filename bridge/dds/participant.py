@@ -183,10 +183,11 @@ class _Domains:
     def release(self, domain_id: int) -> None:
         with self._lock:
             domain, xml, count = self._held[domain_id]
-            if count <= 1:
-                del self._held[domain_id]
-            else:
+            if count > 1:
                 self._held[domain_id] = (domain, xml, count - 1)
+                return
+            del self._held[domain_id]
+            domain.__del__()  # now, so the id can be joined again at once
 
 
 DOMAINS = _Domains()

@@ -12,8 +12,12 @@ import pytest
 FIRST_TEST_DOMAIN, LAST_TEST_DOMAIN = 100, 230
 
 
+_DOMAINS = list(range(FIRST_TEST_DOMAIN, LAST_TEST_DOMAIN + 1))
+random.Random(os.getpid() ^ time.time_ns()).shuffle(_DOMAINS)
+
+
 @pytest.fixture
 def dds_domain() -> int:
-    """A domain id unlikely to be used by anything else on this machine right now."""
-    return random.Random(os.getpid() ^ time.time_ns()).randint(FIRST_TEST_DOMAIN,
-                                                               LAST_TEST_DOMAIN)
+    """A domain id unlikely to be used by anything else on this machine right now (and not
+    by an earlier test of this session, whose participants may linger in other processes)."""
+    return _DOMAINS.pop()

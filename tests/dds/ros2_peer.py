@@ -11,6 +11,10 @@ usage:
       rosbags and print them as one JSON line.
   python3 ros2_peer.py DOMAIN wrench SECONDS FORCE_X
       publish geometry_msgs/msg/Wrench (surge force FORCE_X) on rt/cmd_wrench at 10 Hz.
+  python3 ros2_peer.py DOMAIN call SERVICE TIMEOUT_S
+      call std_srvs/srv/SetBool SERVICE (data: true) the way rmw_cyclonedds_cpp does: a
+      request on rq/<SERVICE>Request led by the request header (the writer's instance handle,
+      a sequence number), the reply taken from rr/<SERVICE>Reply by that header.
 """
 
 # No `from __future__ import annotations`: cyclonedds reads the field annotations as objects.
@@ -73,6 +77,21 @@ class Wrench(IdlStruct, typename="geometry_msgs::msg::dds_::Wrench_"):
     torque: Vector3
 
 
+@dataclass
+class SetBoolRequest(IdlStruct, typename="std_srvs::srv::dds_::SetBool_Request_"):
+    guid: t.uint64  # rmw_cyclonedds_cpp's cdds_request_header_t, then the request's fields
+    seq: t.int64
+    data: bool
+
+
+@dataclass
+class SetBoolResponse(IdlStruct, typename="std_srvs::srv::dds_::SetBool_Response_"):
+    guid: t.uint64
+    seq: t.int64
+    success: bool
+    message: str
+
+
 ROS2_DEFAULT_QOS = Qos(Policy.Reliability.Reliable(1_000_000_000), Policy.Durability.Volatile,
                        Policy.History.KeepLast(10))
 
@@ -105,6 +124,28 @@ def publish_wrench(participant: DomainParticipant, seconds: float, force_x: floa
     return {"ok": True, "sent": sent}
 
 
+def call_set_bool(participant: DomainParticipant, service: str, timeout_s: float) -> dict:
+    client_id = Policy.Userdata(data=b"clientid=peer.1;")  # pairs request writer and reply reader
+    writer = DataWriter(participant, Topic(participant, f"rq{service}Request", SetBoolRequest),
+                        Qos(*ROS2_DEFAULT_QOS, client_id))
+    reader = DataReader(participant, Topic(participant, f"rr{service}Reply", SetBoolResponse),
+                        Qos(*ROS2_DEFAULT_QOS, client_id))
+    guid = writer.get_instance_handle() & (2**64 - 1)
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        if writer.get_publication_matched_status().current_count and \
+                reader.get_subscription_matched_status().current_count:
+            break
+        time.sleep(0.05)
+    writer.write(SetBoolRequest(guid=guid, seq=1, data=True))
+    while time.monotonic() < deadline:
+        for reply in reader.take(N=10):
+            if reply.guid == guid and reply.seq == 1:
+                return {"ok": True, "success": reply.success, "message": reply.message}
+        time.sleep(0.02)
+    return {"ok": False, "reason": "no reply"}
+
+
 def main(argv: list[str]) -> int:
     domain, mode, *args = argv
     participant = DomainParticipant(int(domain))
@@ -112,6 +153,8 @@ def main(argv: list[str]) -> int:
         result = take_imu(participant, int(args[0]), float(args[1]))
     elif mode == "wrench":
         result = publish_wrench(participant, float(args[0]), float(args[1]))
+    elif mode == "call":
+        result = call_set_bool(participant, args[0], float(args[1]))
     else:
         result = {"ok": False, "reason": f"unknown mode {mode}"}
     print(json.dumps(result), flush=True)

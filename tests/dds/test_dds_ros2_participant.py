@@ -94,3 +94,21 @@ async def surge_speed_reaches(odom, target_mps: float, timeout_s: float) -> floa
             if speed >= target_mps:
                 return speed
     return speed
+
+
+async def test_independent_participant_calls_a_service_a_client_provides(dds_domain, registry):
+    """The service request/reply layout written independently in ros2_peer.py (rmw
+    cyclonedds's header, `clientid` user data) meets the bridge's DDS service server."""
+    config = BridgeConfig(host="127.0.0.1", port=0, dds=True, dds_domain=dds_domain)
+    requests = []
+
+    async def gate(args):
+        requests.append(args)
+        return {"success": True, "message": "lock gate opening"}
+
+    async with run_bridge(config) as bridge, \
+            RosbridgeClient(bridge.url, registry=registry) as provider:
+        await provider.advertise_service("/lock_gate", "std_srvs/srv/SetBool", gate)
+        answer = await run_peer(dds_domain, "call", "/lock_gate", "60")
+    assert answer == {"ok": True, "success": True, "message": "lock gate opening"}
+    assert requests == [{"data": True}]

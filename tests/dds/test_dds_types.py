@@ -97,3 +97,10 @@ def test_service_parts_carry_the_request_header(pair, registry):
     request, body = request_header.unwrap(got)
     assert request == RequestId(writer.instance_handle, 3)
     assert from_cdr(registry, spec.request.name, body) == {"data": True}
+
+
+def test_a_domain_left_by_its_last_participant_can_be_joined_again(dds_domain):
+    for _ in range(2):  # Cyclone refuses a second domain with a live id (precondition)
+        participants = [DdsParticipant(dds_domain, CycloneSettings()) for _ in range(2)]
+        for participant in participants:
+            participant.close()
