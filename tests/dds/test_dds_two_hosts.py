@@ -71,6 +71,9 @@ def test_roslibpy_on_host_a_reaches_roslibjs_on_host_b_through_dds(dds_domain):
         ]
         try:
             received = result_of(clients[0])
+            listed = result_of(start(b.command([node, str(JS_DIR / "rosapi.mjs"), url_b,
+                                                "/chatter", "std_msgs/msg/String"]),
+                                     cwd=JS_DIR))
             called = result_of(start(a.command([sys.executable, str(ROSLIBPY_HOST),
                                                 "127.0.0.1", port_a, "call", "/lock_gate",
                                                 "90"])))
@@ -81,7 +84,12 @@ def test_roslibpy_on_host_a_reaches_roslibjs_on_host_b_through_dds(dds_domain):
                     process.kill()
                     process.communicate()
         log_b = bridge_b.text()
+        node_a = bridge_a.wait_for_line(r"as node (?P<node>\S+)").group("node")
     assert received["message"]["data"].startswith("hello from A ")
+    # roslibjs's rosapi helpers on B list what host A has (Foxglove asks the same services).
+    assert "/chatter" in listed["topics"]["topics"]
+    assert listed["topic_type"] == "std_msgs/msg/String"
+    assert node_a in listed["nodes"]
     assert called["response"] == {"success": True, "message": "lock gate opening"}
     assert provided["requests"] == [{"data": True}]
     assert f"interface {b.interface} (peers {a.address}, multicast false)" in log_b
