@@ -24,7 +24,7 @@ from schemas.registry import TypeRegistry
 
 logger = logging.getLogger("bridge.dds")
 
-NodeUpdate = Callable[[bytes, tuple[NodeEntities, ...]], None]
+NodeUpdate = Callable[[bytes, tuple[NodeEntities, ...]], object]
 
 
 def split_node_name(node: str) -> tuple[str, str]:
@@ -77,7 +77,11 @@ class Announcer:
         self._last = current
         msg = participant_entities(self._participant.guid, self.node, *current)
         cdr = to_cdr(self._registry, DISCOVERY_TYPE, msg)
-        self._outbox.put(("discovery",), lambda: self._writer.write(cdr))
+
+        def write() -> None:
+            self._writer.write(cdr)
+
+        self._outbox.put(("discovery",), write)
 
     def _take(self) -> Callable[[], None] | None:
         samples = self._reader.take()

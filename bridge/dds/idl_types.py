@@ -25,6 +25,12 @@ from cyclonedds.idl import IdlStruct, make_idl_struct
 from bridge.dds.naming import type_to_dds
 from schemas.specs import FieldSpec, MessageSpec
 
+# cyclonedds's `array[T, N]`, `sequence[T]` and `bounded_str[N]` are typing-style subscripts
+# at run time; mypy does not know them as generics.
+_array: Any = idl.array
+_sequence: Any = idl.sequence
+_bounded_str: Any = idl.bounded_str
+
 PRIMITIVES: dict[str, Any] = {
     "bool": bool, "byte": idl.byte, "char": idl.uint8,
     "int8": idl.int8, "uint8": idl.uint8, "int16": idl.int16, "uint16": idl.uint16,
@@ -83,16 +89,16 @@ class IdlTypes:
             assert field.message is not None
             element = self._build(field.message, with_request_header=False)
         elif field.base == "string" and field.string_bound:
-            element = idl.bounded_str[field.string_bound]
+            element = _bounded_str[field.string_bound]
         elif field.base in PRIMITIVES:
             element = PRIMITIVES[field.base]
         else:
             raise UnsupportedTypeError(
                 f"field {field.name} of type {field.base} has no DDS mapping here")
         if field.array == "fixed":
-            return idl.array[element, field.length]
+            return _array[element, field.length]
         if field.array == "bounded":
-            return idl.sequence[element, field.length]
+            return _sequence[element, field.length]
         if field.array == "sequence":
-            return idl.sequence[element]
+            return _sequence[element]
         return element

@@ -35,7 +35,7 @@ from schemas.registry import TypeRegistry
 logger = logging.getLogger("bridge.dds")
 
 Apply = Callable[[list[Effect]], None]
-ToLoop = Callable[..., None]  # loop.call_soon_threadsafe
+ToLoop = Callable[..., object]  # loop.call_soon_threadsafe
 
 
 class ServiceMirror:
@@ -55,7 +55,7 @@ class ServiceMirror:
         self.stand_ins: dict[str, int] = {}  # remote node -> its stand-in client id
         self._remote: dict[str, RemoteService] = {}
         self._from_dds: dict[str, tuple[ServiceServer, RequestId]] = {}
-        self._to_dds: dict[tuple[str, int], tuple[int, Any, str]] = {}
+        self._to_dds: dict[tuple[str, int], tuple[int, Any, Any]] = {}
         self._calls = 0
         self._refused: set[str] = set()
 
@@ -155,7 +155,7 @@ class ServiceMirror:
 
     def _caller_receives(self, send: Send) -> None:
         payload = send.item.payload if isinstance(send.item, ControlMessage) else {}
-        waiting = self._from_dds.pop(payload.get("id"), None)
+        waiting = self._from_dds.pop(str(payload.get("id")), None)
         if payload.get("op") != "service_response" or waiting is None:
             return
         server, request = waiting

@@ -69,7 +69,7 @@ class TopicMirror:
     """Creates, replaces and deletes the DDS endpoints of topics; writes and takes samples."""
 
     def __init__(self, participant: DdsParticipant, pump: Pump, outbox: Outbox,
-                 registry: TypeRegistry, deliver: Callable[[list[Arrival]], None]) -> None:
+                 registry: TypeRegistry, deliver: Callable[[list[Arrival]], object]) -> None:
         self._participant = participant
         self._pump = pump
         self._outbox = outbox
