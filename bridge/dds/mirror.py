@@ -32,7 +32,7 @@ from bridge.dds.discovery import DomainView, NodeEntities, Snapshot, participant
 from bridge.dds.graph_sync import GraphSync
 from bridge.dds.outbox import Outbox, WriterThread
 from bridge.dds.participant import DdsParticipant, Pump
-from bridge.dds.qos import QosError, QosProfile, reader_profile, strongest, writer_profile
+from bridge.dds.qos import QosProfile, advertised_profile, reader_profile, strongest
 from bridge.dds.service_mirror import ServiceMirror
 from bridge.dds.topic_mirror import Arrival, TopicMirror, Wanted
 from bridge.errors import BridgeError, DdsStartError
@@ -218,11 +218,9 @@ class DdsMirror:
         return writers, readers
 
     def _advertised(self, entry: TopicEntry, node: str) -> QosProfile:
-        try:
-            return writer_profile(node in entry.latching, entry.qos.get(node))
-        except QosError as exc:
-            if (entry.name, node) not in self._qos_warned:
-                self._qos_warned.add((entry.name, node))
-                logger.warning("[%s] advertise %s: %s; using ROS 2's default QoS", node,
-                               entry.name, exc)
-            return writer_profile(node in entry.latching, None)
+        profile, problem = advertised_profile(node in entry.latching, entry.qos.get(node))
+        if problem and (entry.name, node) not in self._qos_warned:
+            self._qos_warned.add((entry.name, node))
+            logger.warning("[%s] op=advertise topic=%s: %s; the DDS writer takes ROS 2's "
+                           "default QoS", node, entry.name, problem)
+        return profile

@@ -70,6 +70,14 @@ def writer_profile(latch: bool, qos: Mapping[str, Any] | None) -> QosProfile:
     return QosProfile(reliable, transient, depth)
 
 
+def advertised_profile(latch: bool, qos: Mapping[str, Any] | None) -> tuple[QosProfile, str]:
+    """`writer_profile`, or the profile without `qos` and the reason when `qos` is bad."""
+    try:
+        return writer_profile(latch, qos), ""
+    except QosError as exc:
+        return writer_profile(latch, None), str(exc)
+
+
 def _choice(qos: Mapping[str, Any], key: str, table: Mapping[str, bool], default: bool) -> bool:
     value = qos.get(key)
     if value is None:

@@ -18,6 +18,7 @@ from bridge.dds.qos import (
     READER_DEPTH,
     QosError,
     QosProfile,
+    advertised_profile,
     reader_profile,
     strongest,
     writer_profile,
@@ -75,6 +76,10 @@ def test_writer_qos_follows_ros2_defaults_latch_and_the_advertise_qos_object():
                 {"history": "keep_some"}):
         with pytest.raises(QosError):
             writer_profile(False, bad)
+    assert advertised_profile(True, {"reliability": "sometimes"}) == (
+        LATCHED, "qos.reliability must be one of reliable, best_effort, best_available, "
+                 "system_default; got 'sometimes'")
+    assert advertised_profile(False, {"depth": 3}) == (QosProfile(depth=3), "")
 
 
 def test_reader_qos_adapts_to_the_writers_it_must_match():
