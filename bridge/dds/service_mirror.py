@@ -117,6 +117,8 @@ class ServiceMirror:
         client = self.clients.pop(name, None)
         if client is not None:
             client.close()
+        for key in [k for k in self._to_dds if k[0] == name]:  # unadvertising fails them
+            del self._to_dds[key]
         stand_in = self.stand_ins.get(service.node)
         if stand_in is None:
             return client is not None
