@@ -76,6 +76,22 @@ class DdsMirror:
             raise DdsStartError(
                 f"cannot join DDS domain {self.config.dds_domain} on interface "
                 f"{settings.interface!r} (does it exist and have an address?): {exc}") from exc
+        try:
+            self._assemble(loop)
+        except Exception as exc:  # e.g. a type Cyclone refuses: leave the domain again
+            self.participant.close()
+            raise DdsStartError(f"cannot set up the DDS mirror: {exc!r}") from exc
+        self.core.add_sink(self)
+        self.writer.start()
+        self.pump.start()
+        self._task = asyncio.create_task(self._reconcile_forever(), name="bridge-dds")
+        logger.info("DDS: domain %d on interface %s (peers %s, multicast %s) as node %s",
+                    self.config.dds_domain, settings.interface,
+                    ", ".join(settings.effective_peers()) or "none", settings.multicast,
+                    self.node)
+
+    def _assemble(self, loop: asyncio.AbstractEventLoop) -> None:
+        """The mirror's parts on the joined participant (no thread started yet)."""
         node = self.config.dds_node or f"riverbridge_{self.participant.short_id()}"
         self.node = node if node.startswith("/") else "/" + node
         self.outbox = Outbox()
@@ -91,14 +107,6 @@ class DdsMirror:
                                    self.node, lambda p, n: to_loop(self._nodes_seen, p, n))
         for condition in self.participant.discovery_conditions:
             self.pump.watch(condition, self._take_discovery)
-        self.core.add_sink(self)
-        self.writer.start()
-        self.pump.start()
-        self._task = asyncio.create_task(self._reconcile_forever(), name="bridge-dds")
-        logger.info("DDS: domain %d on interface %s (peers %s, multicast %s) as node %s",
-                    self.config.dds_domain, settings.interface,
-                    ", ".join(settings.effective_peers()) or "none", settings.multicast,
-                    self.node)
 
     async def stop(self) -> None:
         if self._task is not None:
@@ -122,7 +130,7 @@ class DdsMirror:
         """Every message published in the graph: send those of websocket clients to DDS."""
         if self._injecting or origin_node not in self.local_nodes():
             return
-        if not self.topics.send(message):
+        if not self.topics.send(message) and not self.topics.refused(message.topic):
             self._waiting_first[message.topic] = message  # its writer is made next
             self._wake.set()
 

@@ -107,6 +107,10 @@ class TopicMirror:
             self._refuse(topic, type_name, str(exc))
             return None
 
+    def refused(self, topic: str) -> bool:
+        """True if the topic cannot be mirrored (its type has no DDS form, Cyclone refused)."""
+        return any(name == topic for name, _ in self._refused)
+
     def _refuse(self, topic: str, type_name: str, why: str) -> None:
         if (topic, type_name) not in self._refused:
             self._refused.add((topic, type_name))

@@ -69,11 +69,13 @@ async def test_topics_cross_once_each_way_and_never_echo(dds_domain, registry):
             await on_a.publish("/chatter", {"data": f"a{n}"})
             await on_b.publish("/chatter", {"data": f"b{n}"})
             await asyncio.sleep(0.01)
-        seen_a = Counter(m["data"] for m in await collect(heard_a, 40))
-        seen_b = Counter(m["data"] for m in await collect(heard_b, 40))
+        got_a = [m["data"] for m in await collect(heard_a, 40)]
+        got_b = [m["data"] for m in await collect(heard_b, 40)]
     expected = Counter({f"{side}{n}": 1 for side in "ab" for n in range(20)})
-    assert seen_a == expected  # its own once (locally), the other's once (over DDS)
-    assert seen_b == expected
+    assert Counter(got_a) == expected  # its own once (locally), the other's once (over DDS)
+    assert Counter(got_b) == expected
+    assert [d for d in got_a if d[0] == "b"] == [f"b{n}" for n in range(20)]  # in order
+    assert [d for d in got_b if d[0] == "a"] == [f"a{n}" for n in range(20)]
 
 
 async def collect(sub, count: int, timeout_s: float = 10.0, grace_s: float = 0.3) -> list[dict]:
