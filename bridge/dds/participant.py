@@ -13,6 +13,7 @@ the GIL while the event loop works and stop acknowledging fragments.
 from __future__ import annotations
 
 import ctypes
+import itertools
 import logging
 import threading
 import zlib
@@ -210,6 +211,7 @@ class DdsParticipant:
         self.publisher = Publisher(self.participant)
         self.subscriber = Subscriber(self.participant)
         self.types = IdlTypes()
+        self.pairings = itertools.count(1)  # numbers rmw-style client/service pairing ids
         self._topics: dict[str, Topic] = {}
         self._lock = threading.Lock()
         self._discovery = [

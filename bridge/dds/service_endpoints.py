@@ -28,14 +28,12 @@ from schemas.registry import TypeRegistry
 logger = logging.getLogger("bridge.dds")
 
 Received = Callable[[str, RequestId, dict[str, Any]], None]  # (service, id, message)
-_pairing_counter = itertools.count(1)
 
 
-def pairing_id(participant_guid: bytes) -> str:
+def pairing_id(participant_guid: bytes, number: int) -> str:
     """rmw_cyclonedds's client/service id: the participant's GUID prefix and a counter,
     as dot-separated hex bytes."""
-    counter = next(_pairing_counter).to_bytes(4, "big")
-    return ".".join(f"{b:x}" for b in participant_guid[:12] + counter)
+    return ".".join(f"{b:x}" for b in participant_guid[:12] + number.to_bytes(4, "big"))
 
 
 class _ServiceEndpoints:
@@ -55,7 +53,8 @@ class _ServiceEndpoints:
         outgoing, incoming = (spec.response, spec.request) if is_server else (spec.request,
                                                                               spec.response)
         self._outgoing, self._incoming = outgoing.name, incoming.name
-        key = ("serviceid=" if is_server else "clientid=") + pairing_id(participant.guid) + ";"
+        key = (("serviceid=" if is_server else "clientid=")
+               + pairing_id(participant.guid, next(participant.pairings)) + ";")
         types = participant.types
         write_topic, read_topic = ((reply_topic(service), request_topic(service)) if is_server
                                    else (request_topic(service), reply_topic(service)))
