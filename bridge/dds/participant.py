@@ -221,6 +221,8 @@ class DdsParticipant:
         self.discovery_conditions = [ReadCondition(r, SampleState.NotRead | ViewState.Any
                                                    | InstanceState.Any)
                                      for r in self._discovery]
+        self._alive = [ReadCondition(r, _ALIVE) for r in self._discovery]
+        self._gone = [ReadCondition(r, _NOT_ALIVE) for r in self._discovery]
 
     def short_id(self) -> str:
         """Eight hex digits naming this participant (its node name's suffix)."""
@@ -251,15 +253,15 @@ class DdsParticipant:
 
     def snapshot(self) -> Snapshot:
         """Every remote participant and endpoint alive now (ours left out)."""
-        participants_reader, publications, subscriptions = self._discovery
-        for reader in self._discovery:
-            reader.take(N=1_000_000, condition=ReadCondition(reader, _NOT_ALIVE))
-        participants = {p.key.bytes for p in participants_reader.read(
-            N=1_000_000, condition=ReadCondition(participants_reader, _ALIVE))}
+        for reader, gone in zip(self._discovery, self._gone, strict=True):
+            reader.take(N=1_000_000, condition=gone)
+        participants = {p.key.bytes for p in self._discovery[0].read(
+            N=1_000_000, condition=self._alive[0])}
         participants.discard(self.guid)
         endpoints = []
-        for reader, is_writer in ((publications, True), (subscriptions, False)):
-            for sample in reader.read(N=1_000_000, condition=ReadCondition(reader, _ALIVE)):
+        for index, is_writer in ((1, True), (2, False)):
+            reader, alive = self._discovery[index], self._alive[index]
+            for sample in reader.read(N=1_000_000, condition=alive):
                 if sample.participant_key.bytes == self.guid:
                     continue
                 endpoints.append(Endpoint(
