@@ -15,6 +15,8 @@ command -v npm >/dev/null 2>&1 || missing+=(npm)
 command -v docker-compose >/dev/null 2>&1 || missing+=(docker-compose)
 # Debian's Chromium for the dashboard's browser tests (playwright-core drives it; no downloads)
 [ -x /usr/bin/chromium ] || missing+=(chromium)
+# iproute2's `ip` makes the two network namespaces of the DDS two-host test (tests/dds)
+command -v ip >/dev/null 2>&1 || missing+=(iproute2)
 if [ ${#missing[@]} -gt 0 ]; then
     echo "setup: installing ${missing[*]} from Debian's packages" >&2
     apt-get update -qq
