@@ -22,8 +22,8 @@ from navigation.fusion import obstacle_grid, occupancy_grid_msg
 from navigation.lidar_messages import box_array_msg, marker_array_msg
 from navigation.lidar_worker import LidarWorker, StepTimes, lidar_worker_for
 from navigation.messages import stamp_ns_of
-from navigation.pointcloud import xyz_view
 from navigation.radar import PolarGeometry, detect, detection_array_msg, radar_power
+from schemas.pointcloud import XYZ, view_points
 
 TOPIC_BOXES = "/nav/boxes"
 TOPIC_MARKERS = "/nav/markers"
@@ -96,7 +96,7 @@ class Processors:
         spans of ``filter``, ``dbscan`` and ``boxes`` (the thesis's 29 ms and 186 ms) in
         ``lidar_steps`` for stage tracing (one LIDAR thread, so read it after the call)."""
         stamp_ns, frame_id = stamp_ns_of(msg["header"]), msg["header"]["frame_id"]
-        result = self.lidar_worker(xyz_view(msg))
+        result = self.lidar_worker(view_points(msg, XYZ))
         self.lidar_steps = result.steps
         self.latest.set_boxes(result.boxes, stamp_ns)
         method = self.config.lidar.method

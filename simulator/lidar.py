@@ -14,9 +14,9 @@ from typing import NamedTuple
 
 import numpy as np
 
+from schemas.pointcloud import LAYOUTS, pack_points
 from simulator.config import LidarConfig
 from simulator.frames import Pose2D, rotate_rows, sensor_pose_in_map
-from simulator.messages import point_cloud2
 from simulator.objects import WATER
 from simulator.raycast import RayCaster, fill_origins
 from simulator.scene import Scene
@@ -138,4 +138,4 @@ class Lidar:
     def message(self, points: np.ndarray, stamp_ns: int) -> dict:
         """sensor_msgs/msg/PointCloud2 of a scan (`point_fields`), stamped with its capture
         time."""
-        return point_cloud2(points, stamp_ns, self.cfg.frame_id, self.cfg.point_fields)
+        return pack_points(points, stamp_ns, self.cfg.frame_id, LAYOUTS[self.cfg.point_fields])

@@ -10,7 +10,7 @@ from navigation.config import GroundConfig, LidarConfig
 from navigation.lidar import obstacle_points, process_scan
 from navigation.lidar_filter import estimate_water_level, range_mask, voxel_downsample
 from navigation.lidar_messages import box_array_msg, marker_array_msg
-from navigation.pointcloud import pointcloud2_msg, xyzi_view
+from schemas.pointcloud import pack_points, view_points
 
 MARGIN_M = 0.35  # object points this close to water or terrain may go with the background
 
@@ -159,9 +159,9 @@ def test_alternative_methods_produce_boxes(scan, method):
 
 def test_pipeline_accepts_a_pointcloud2_view(scan, check_canonical):
     _, points, _ = scan
-    msg = pointcloud2_msg(points, 1_500_000_000, "lidar")
+    msg = pack_points(points, 1_500_000_000, "lidar")
     check_canonical("sensor_msgs/msg/PointCloud2", msg)
-    view = xyzi_view(msg)
+    view = view_points(msg)
     assert np.shares_memory(view, np.frombuffer(msg["data"], np.uint8))
     np.testing.assert_array_equal(view, points)
     assert process_scan(view, LidarConfig()).num_clusters == 8

@@ -23,8 +23,8 @@ from navigation.config import NavigationConfig
 from navigation.lidar_worker import ProcessLidarWorker, ThreadLidarWorker
 from navigation.messages import header_msg
 from navigation.node import NavigationNode, serve
-from navigation.pointcloud import pointcloud2_msg
 from navigation.processors import Processors
+from schemas.pointcloud import pack_points
 
 pytestmark = pytest.mark.slow
 WAIT_S = 30.0
@@ -58,7 +58,7 @@ INPUTS = {
 
 def scan_msg(stamp_ns: int) -> dict[str, Any]:
     points, _ = raycast(default_scene(), lidar_directions(0.25, 0.25))
-    return pointcloud2_msg(points, stamp_ns, "lidar")
+    return pack_points(points, stamp_ns, "lidar")
 
 
 def radar_msg(stamp_ns: int) -> dict[str, Any]:
