@@ -29,7 +29,7 @@ from navigation.imu import ImuTracker
 from navigation.processors import (
     OUTPUT_TYPES,
     TOPIC_DIAGNOSTICS,
-    Outputs,
+    Handled,
     Processors,
 )
 from schemas.process_tuning import background_priority
@@ -77,7 +77,7 @@ class NavigationNode:
             )
             for name in SENSOR_INPUTS
         }
-        self._handlers: dict[str, Callable[[dict[str, Any]], Outputs]] = {
+        self._handlers: dict[str, Callable[[dict[str, Any]], Handled]] = {
             "lidar": self.processors.lidar,
             "radar": self.processors.radar,
             "camera": self.processors.camera,
@@ -135,7 +135,7 @@ class NavigationNode:
             start = time.perf_counter()
             start_ns = time.time_ns()
             try:
-                outputs = await loop.run_in_executor(
+                handled = await loop.run_in_executor(
                     self._executors[name], self._handlers[name], received.msg
                 )
             except Exception:  # one bad message must not end the sensor's loop
@@ -144,10 +144,9 @@ class NavigationNode:
                 continue
             counters.record((time.perf_counter() - start) * 1e3)
             if self._tracer is not None:
-                steps = self.processors.lidar_steps if name == "lidar" else None
                 self._tracer.processed(sub.topic, header_stamp_ns(received.msg), start_ns,
-                                       time.time_ns(), received.recv_ns, steps)
-            for topic, msg in outputs:
+                                       time.time_ns(), received.recv_ns, handled.steps)
+            for topic, msg in handled.outputs:
                 await self._client.publish(topic, msg)
 
     async def _imu_loop(self) -> None:

@@ -193,3 +193,11 @@ def test_empty_scan_gives_no_boxes(check_canonical):
     check_canonical(
         "visualization_msgs/msg/MarkerArray", marker_array_msg(result.boxes, 0, "lidar")
     )
+
+
+def test_pipeline_returns_the_spans_of_its_steps(scan):
+    _, points, _ = scan
+    steps = process_scan(points, LidarConfig()).steps
+    assert list(steps) == ["filter", "dbscan", "boxes"]
+    (f0, f1), (d0, d1), (b0, b1) = steps.values()
+    assert f0 <= f1 == d0 <= d1 == b0 <= b1  # back to back, in pipeline order

@@ -18,6 +18,7 @@ from lidar_gate import GatedScan
 from nav_scenes import default_scene, lidar_directions, radar_noise_image, raycast
 
 from clients import RosbridgeClient
+from clients.tracing import Tracer
 from navigation.cli import main
 from navigation.config import NavigationConfig
 from navigation.lidar_worker import ProcessLidarWorker, ThreadLidarWorker
@@ -181,9 +182,9 @@ async def test_slow_lidar_neither_delays_camera_and_imu_nor_queues_scans(
     entered, gate = tmp_path / "entered", tmp_path / "gate"
     lidar = worker(config.lidar, GatedScan(entered, gate, WAIT_S))
     processors = Processors(config, lidar_worker=lidar)
-    stop = asyncio.Event()
+    stop, tracer = asyncio.Event(), Tracer("navigation")
     async with RosbridgeClient(bridge_url, connect_timeout=5.0, name="nav") as client:
-        node = NavigationNode(client, config, processors)
+        node = NavigationNode(client, config, processors, tracer=tracer)
         node_task = asyncio.create_task(node.run(stop))
         try:
             await wait_until(lambda: "imu" in node.subscriptions, "node subscriptions")
@@ -204,7 +205,10 @@ async def test_slow_lidar_neither_delays_camera_and_imu_nor_queues_scans(
             gate.touch()
             await wait_until(lambda: node.counters["lidar"].processed == 2, "newest scan")
             assert node.counters["lidar"].skipped == 2
-            assert processors.lidar_steps.keys() == {"filter", "dbscan", "boxes"}
+            # the pipeline's step timings, returned from the worker, reach the trace
+            stages = {s["stage"] for s in tracer.batch_msg()["spans"]
+                      if s["topic"] == "/lidar/points"}
+            assert {"process", "process.filter", "process.dbscan", "process.boxes"} <= stages
         finally:
             gate.touch()
             stop.set()
