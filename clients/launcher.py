@@ -39,6 +39,7 @@ from pydantic import BaseModel, ConfigDict, Field
 from clients.client import RosbridgeClient
 from clients.errors import RosbridgeError
 from clients.healthcheck import Unhealthy, fetch_version, missing_publishers
+from schemas.catalogue import streams_of
 
 log = logging.getLogger(__name__)
 T = TypeVar("T")
@@ -46,10 +47,9 @@ T = TypeVar("T")
 BRIDGE_URL = "{bridge_url}"
 """Placeholder in a component's arguments, replaced by the bridge's URL once it listens."""
 
-SIMULATOR_TOPICS = ("/lidar/points", "/radar/image", "/camera/image/compressed", "/imu/data",
-                    "/gnss/fix", "/odom", "/tf")
-NAVIGATION_TOPICS = ("/nav/boxes", "/nav/markers", "/nav/radar_detections", "/nav/lines",
-                     "/nav/obstacle_map", "/nav/diagnostics")
+# Ready when these have publishers: what each always streams (schemas.catalogue).
+SIMULATOR_TOPICS = streams_of("simulator")
+NAVIGATION_TOPICS = streams_of("navigation")
 
 # glibc malloc tuning for 4 MB sensor buffers: fresh mmap'd buffers cost ~3 ms of page faults
 # per scan (performance-measurements.md, page-fault note); these keep them on the heap.

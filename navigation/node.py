@@ -32,20 +32,19 @@ from navigation.processors import (
     Handled,
     Processors,
 )
+from schemas.catalogue import TOPICS, consumed_by, period_s
 from schemas.process_tuning import background_priority
 from schemas.tracing import header_stamp_ns
 
 log = logging.getLogger(__name__)
 
 
-SENSOR_INPUTS = {
-    "lidar": ("/lidar/points", "sensor_msgs/msg/PointCloud2"),
-    "radar": ("/radar/image", "riverbridge_msgs/msg/RadarImage"),
-    "camera": ("/camera/image/compressed", "sensor_msgs/msg/CompressedImage"),
-}
-IMU_INPUT = ("/imu/data", "sensor_msgs/msg/Imu")
+# What navigation reads (schemas.catalogue): the heavy sensors, each on a thread of its own,
+# and the IMU on the event loop.
+SENSOR_INPUTS = {t.key: t.pair for t in consumed_by("navigation", "sensor")}
+IMU_INPUT = TOPICS["imu"].pair
 IMU_QUEUE = 1000  # IMU messages are tiny and every one counts for the gap statistics
-DIAGNOSTICS_PERIOD_S = 1.0
+DIAGNOSTICS_PERIOD_S = period_s("diagnostics")
 
 
 class NavigationNode:

@@ -24,23 +24,17 @@ from navigation.lidar_messages import box_array_msg, marker_array_msg
 from navigation.lidar_worker import LidarWorker, lidar_worker_for
 from navigation.messages import stamp_ns_of
 from navigation.radar import PolarGeometry, detect, detection_array_msg, radar_power
+from schemas.catalogue import TOPICS, published_by
 from schemas.pointcloud import XYZ, view_points
 
-TOPIC_BOXES = "/nav/boxes"
-TOPIC_MARKERS = "/nav/markers"
-TOPIC_RADAR = "/nav/radar_detections"
-TOPIC_LINES = "/nav/lines"
-TOPIC_MAP = "/nav/obstacle_map"
-TOPIC_DIAGNOSTICS = "/nav/diagnostics"
-
-OUTPUT_TYPES = {
-    TOPIC_BOXES: "riverbridge_msgs/msg/BoxArray",
-    TOPIC_MARKERS: "visualization_msgs/msg/MarkerArray",
-    TOPIC_RADAR: "riverbridge_msgs/msg/RadarDetectionArray",
-    TOPIC_LINES: "riverbridge_msgs/msg/ImageLineArray",
-    TOPIC_MAP: "nav_msgs/msg/OccupancyGrid",
-    TOPIC_DIAGNOSTICS: "diagnostic_msgs/msg/DiagnosticArray",
-}
+TOPIC_BOXES = TOPICS["boxes"].name
+TOPIC_MARKERS = TOPICS["markers"].name
+TOPIC_RADAR = TOPICS["radar_detections"].name
+TOPIC_LINES = TOPICS["lines"].name
+TOPIC_MAP = TOPICS["obstacle_map"].name
+TOPIC_DIAGNOSTICS = TOPICS["diagnostics"].name
+# Everything navigation publishes (schemas.catalogue), advertised at start.
+OUTPUT_TYPES = {t.name: t.type for t in published_by("navigation")}
 
 Outputs = list[tuple[str, dict[str, Any]]]
 
