@@ -76,11 +76,11 @@ class NavigationNode:
             )
             for name in SENSOR_INPUTS
         }
-        self._handlers: dict[str, Callable[[dict[str, Any]], Handled]] = {
-            "lidar": self.processors.lidar,
-            "radar": self.processors.radar,
-            "camera": self.processors.camera,
-        }
+        self._handlers: dict[str, Callable[[dict[str, Any]], Handled]] = (
+            self.processors.handlers())
+        unhandled = SENSOR_INPUTS.keys() - self._handlers.keys()
+        if unhandled:
+            raise ValueError(f"no navigation handler for input topics {sorted(unhandled)}")
 
     async def run(self, stop: asyncio.Event) -> None:
         """Advertise, subscribe, process until ``stop`` is set, then release the threads and

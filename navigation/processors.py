@@ -9,6 +9,7 @@ The LIDAR handler hands the points to a ``LidarWorker`` (by default a worker pro
 from __future__ import annotations
 
 import threading
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -93,6 +94,11 @@ class Processors:
     def close(self) -> None:
         """Stop the LIDAR worker; waits for a scan in progress."""
         self.lidar_worker.close()
+
+    def handlers(self) -> dict[str, Callable[[dict[str, Any]], Handled]]:
+        """The handler of each input topic, by catalogue key (the node runs each on a thread
+        of its own)."""
+        return {"lidar": self.lidar, "radar": self.radar, "camera": self.camera}
 
     def lidar(self, msg: dict[str, Any]) -> Handled:
         """PointCloud2 -> BoxArray and MarkerArray (thesis 3.5.3), with the spans of the

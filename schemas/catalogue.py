@@ -1,4 +1,6 @@
-"""Every topic riverbridge's own processes publish or read, in one table (plain data, no I/O).
+"""Every topic the simulator, navigation and the telemetry publish or read, in one table.
+
+Plain data, no I/O. (The bridge's own ``/rosout`` and ``/client_count`` are not here.)
 
 The simulator advertises and schedules its sensors from it, navigation subscribes and
 advertises from it, ``riverbridge up`` waits for its publishers, the report takes its topic

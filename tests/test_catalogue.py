@@ -8,9 +8,9 @@ from pydantic import BaseModel
 
 from clients.launcher import NAVIGATION_TOPICS, SIMULATOR_TOPICS
 from clients.report import SENSOR_TOPICS
-from navigation.config import NavigationConfig
+from navigation.config import LidarConfig, NavigationConfig
 from navigation.node import IMU_INPUT, SENSOR_INPUTS
-from navigation.processors import OUTPUT_TYPES
+from navigation.processors import OUTPUT_TYPES, Processors
 from schemas.catalogue import (
     PRODUCERS,
     ROLES,
@@ -87,6 +87,8 @@ def test_navigation_reads_and_writes_what_the_catalogue_says():
                                                          consumed_by("navigation")}
     assert {t.name: t.type for t in published_by("navigation")} == OUTPUT_TYPES
     assert NAVIGATION_TOPICS == streams_of("navigation") == tuple(OUTPUT_TYPES)
+    handlers = Processors(NavigationConfig(lidar=LidarConfig(worker="thread"))).handlers()
+    assert handlers.keys() == SENSOR_INPUTS.keys()
 
 
 def test_the_report_measures_the_thesis_sensors():
