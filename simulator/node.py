@@ -24,6 +24,7 @@ import time
 from collections import deque
 from collections.abc import Awaitable, Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor
+from typing import Any
 
 from clients import RosbridgeClient, Subscription
 from clients.node_links import node_links
@@ -157,7 +158,7 @@ class SimulatorNode:
             await self._publish_latched(TOPICS["ground_truth"],
                                         markers_msg(self.scene.objects, now_ns))
 
-    async def _publish_latched(self, topic: Topic, msg: dict) -> None:
+    async def _publish_latched(self, topic: Topic, msg: dict[str, Any]) -> None:
         await self._client.advertise(*topic.pair, latch=True)
         await self._client.publish(topic.name, msg)
 
@@ -245,7 +246,7 @@ class SimulatorNode:
 
         return tick
 
-    async def _publish_truth(self, truth: tuple[tuple[str, dict], ...]) -> None:
+    async def _publish_truth(self, truth: tuple[tuple[str, dict[str, Any]], ...]) -> None:
         await asyncio.sleep(TRUTH_DELAY_S)
         for topic, msg in truth:
             await self._client.publish(topic, msg)

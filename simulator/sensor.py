@@ -66,9 +66,18 @@ class SensorFrame:
 class Sensor(Protocol):
     """One source of messages on the simulator's schedules (see the module docstring)."""
 
-    topic: Topic  # its schemas.catalogue entry
-    schedule: Schedule
-    frame: SensorFrame | None  # None: no frame of its own on the vessel (odometry, tf)
+    @property
+    def topic(self) -> Topic:
+        """Its schemas.catalogue entry."""
+        ...
+
+    @property
+    def schedule(self) -> Schedule: ...
+
+    @property
+    def frame(self) -> SensorFrame | None:
+        """Where it sits on the vessel; None: no frame of its own (odometry, tf)."""
+        ...
 
     def generate(self, capture: Capture) -> Generated:
         """The message of ``capture`` (a worker sensor runs this on its own thread)."""

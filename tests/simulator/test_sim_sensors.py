@@ -15,7 +15,7 @@ import pytest
 from bridge.config import BridgeConfig
 from bridge.server import run_bridge
 from clients import RosbridgeClient
-from schemas.catalogue import TOPICS, Topic, by_name
+from schemas.catalogue import TOPICS, Role, Topic, by_name
 from simulator.config import (
     CameraConfig,
     GroundTruthConfig,
@@ -91,7 +91,7 @@ class Probe:
         self.closed = True
 
 
-def probe_topic(key: str, role: str, rate_key: str) -> Topic:
+def probe_topic(key: str, role: Role, rate_key: str) -> Topic:
     return Topic(key, f"/test/{key}", "std_msgs/msg/String", "simulator", role, "a test probe",
                  rate_key=rate_key)
 
