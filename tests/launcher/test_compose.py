@@ -128,7 +128,7 @@ def test_image_serves_the_dashboard_as_a_user_without_the_build_settings() -> No
                       "COPY --from=dashboard /web/dist /opt/riverbridge/web",
                       "COPY config /config"]
     assert dockerfile_env()["RIVERBRIDGE_WEB_ROOT"] == "/opt/riverbridge/web"
-    assert any(line.startswith("USER ") and "root" != line.split()[1] for line in image)
+    assert any(line.startswith("USER ") and line.split()[1] != "root" for line in image)
     assert image[-1].startswith("CMD ")
     for stage in ("dashboard", "install"):
         assert "COPY docker/build-config/ /build-config/" in dockerfile_stages()[stage]
