@@ -14,10 +14,12 @@ from __future__ import annotations
 import argparse
 import asyncio
 import logging
+import struct
 import sys
 from pathlib import Path
 
 from mcap.exceptions import McapError
+from mcap.reader import SeekingReader
 
 from clients.errors import ConnectionFailed
 from clients.node_cli import run_until_stopped
@@ -32,6 +34,11 @@ def recording_file(text: str) -> Path:
     path = Path(text)
     if not path.is_file():
         raise argparse.ArgumentTypeError(f"no such file: {text}")
+    try:
+        with open(path, "rb") as stream:
+            SeekingReader(stream)  # reads the magic bytes
+    except (McapError, OSError, struct.error) as exc:  # struct.error: under 8 bytes
+        raise argparse.ArgumentTypeError(f"not an MCAP file: {text} ({exc})") from None
     return path
 
 
