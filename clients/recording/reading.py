@@ -78,3 +78,19 @@ def _stream(reader: NonSeekingReader, wanted: Callable[[str], bool],
             return
         if schema is not None and wanted(channel.topic) and is_ros2(schema, channel):
             yield _message(schema, channel, message)
+
+
+def recorded_topics(path: Path) -> dict[str, str]:
+    """Topic -> type of the ROS 2 channels in ``path`` (from the summary, or by reading a file
+    that has none)."""
+    with open(path, "rb") as stream:
+        reader = SeekingReader(stream)
+        try:
+            summary = reader.get_summary()
+        except Exception:  # cut-off file, see read_recording
+            summary = None
+        if summary is not None:
+            return {c.topic: summary.schemas[c.schema_id].name
+                    for c in summary.channels.values()
+                    if is_ros2(summary.schemas.get(c.schema_id), c)}
+    return {m.topic: m.type_name for m in read_recording(path, lambda _topic: True)}
