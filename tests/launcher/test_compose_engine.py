@@ -138,6 +138,7 @@ def check_metrics(port: int) -> None:
     assert families["process_cpu_seconds"].samples[0].value > 0
 
 
+@pytest.mark.timeout(UP_TIMEOUT_S + HEALTHY_TIMEOUT_S + 600)
 def test_compose_up_builds_runs_and_serves_the_stack(engine: None, tmp_path: Path) -> None:
     timings: dict[str, float] = {}
     start = time.monotonic()
