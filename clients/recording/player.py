@@ -36,6 +36,7 @@ from pathlib import Path
 from typing import Any, Literal
 
 from rosbags.typesys import get_types_from_msg
+from rosbags.typesys.base import TypesysError
 
 from clients.client import RosbridgeClient
 from clients.node_links import node_links
@@ -104,10 +105,17 @@ def restamp(msg: Any, change: Callable[[int], int]) -> None:
 
 
 def ensure_type(registry: TypeRegistry, type_name: str, definition: str) -> None:
-    """Register ``type_name`` from its full ``ros2msg`` text unless it is already known."""
+    """Register ``type_name`` from its full ``ros2msg`` text unless it is already known.
+
+    Raises :class:`SchemaError` when the text does not parse or clashes with known types."""
     if registry.has_message(type_name):
         return
-    registry.add_interfaces(InterfaceSet(types=get_types_from_msg(definition, type_name)))
+    try:
+        types = get_types_from_msg(definition, type_name)
+    except TypesysError as exc:
+        raise SchemaError(f"the recording's definition of {type_name} does not parse: "
+                          f"{exc}") from None
+    registry.add_interfaces(InterfaceSet(types=types))
 
 
 class Player:
@@ -217,7 +225,7 @@ class Player:
         try:
             ensure_type(self.registry, recorded.type_name, recorded.definition)
             msg = from_cdr(self.registry, recorded.type_name, recorded.cdr)
-        except (SchemaError, ValueError) as exc:
+        except SchemaError as exc:
             self.stats.skipped_topics[topic] = str(exc)
             log.warning("not playing %s (%s): %s", topic, recorded.type_name, exc)
             return None

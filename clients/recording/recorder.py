@@ -171,11 +171,13 @@ class Recorder:
         self._backlog_bytes += size
         self.stats.messages += 1
         self.stats.bytes += size
+        loop = asyncio.get_running_loop()
         future = self._pool.submit(self._add, topic, bytes(cdr), recv_ns, publish_ns)
-        future.add_done_callback(lambda _: self._written(size))
+        # the callback runs on the writer thread; the count is only ever changed on the loop
+        future.add_done_callback(lambda _: loop.call_soon_threadsafe(self._written, size))
 
     def _written(self, size: int) -> None:
-        self._backlog_bytes -= size  # an int update from the writer thread: atomic under the GIL
+        self._backlog_bytes -= size
 
     def _add(self, topic: str, cdr: bytes, log_ns: int, publish_ns: int) -> None:
         assert self._file is not None
