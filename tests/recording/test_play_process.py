@@ -66,16 +66,19 @@ def recording(tmp_path: Path, seconds: float) -> tuple[Path, list[tuple[str, int
 
 def check_timing(arrivals: list[Arrival], events: list[tuple[str, int, int]],
                  rate: float) -> None:
-    """Messages arrive at their recorded offsets / rate: the span within 5 %, 99 % of the IMU
-    samples within 5 % of the recording's length of their time (the rest may meet a busy
-    core), the median within 1 %."""
+    """Messages arrive at their recorded offsets / rate. Arrival minus due time is the latency
+    plus the timing error; with the median latency taken out, 99 % of the IMU samples are
+    within 5 % of the recording's length of their time and the median within 1 % (the rest
+    may meet a busy core; the first message of a topic is slower through every process), and
+    the span is within 5 %."""
     span_s = (events[-1][1] - events[0][1]) / NS_PER_S / rate
-    first_recv = min(a.recv_ns for a in arrivals)
     recorded = {(topic, index): log_ns for topic, log_ns, index in events}
     imu = [a for a in arrivals if a.topic == IMU[0]]
-    errors = sorted(abs((a.recv_ns - first_recv) / NS_PER_S
-                        - (recorded[(IMU[0], a.index)] - events[0][1]) / NS_PER_S / rate)
-                    for a in imu)
+    lags = [(a.recv_ns - imu[0].recv_ns) / NS_PER_S
+            - (recorded[(IMU[0], a.index)] - recorded[(IMU[0], imu[0].index)]) / NS_PER_S / rate
+            for a in imu]
+    latency = sorted(lags)[len(lags) // 2]
+    errors = sorted(abs(lag - latency) for lag in lags)
     p50, p99 = errors[len(errors) // 2], errors[int(0.99 * (len(errors) - 1))]
     assert p50 <= 0.01 * span_s and p99 <= TOLERANCE * span_s, (
         f"IMU samples off their time: median {p50 * 1e3:.0f} ms, p99 {p99 * 1e3:.0f} ms, "
