@@ -38,6 +38,7 @@ PROJECT = "riverbridge-engine-test"
 UP_TIMEOUT_S = 1500.0  # a cold build on a loaded 2-core machine
 HEALTHY_TIMEOUT_S = 300.0
 SERVICES = ("bridge", "simulator", "navigation")
+IMAGE = "riverbridge:0.1.0"  # docker-compose.yml's image
 
 
 @pytest.fixture(scope="module")
@@ -138,6 +139,18 @@ def check_metrics(port: int) -> None:
     assert families["process_cpu_seconds"].samples[0].value > 0
 
 
+def check_image() -> None:
+    """The image runs as its own user and holds none of the build settings."""
+    user = run("docker", "image", "inspect", "-f", "{{.Config.User}}", IMAGE).stdout.strip()
+    assert user == "riverbridge", user
+    inside = run("docker", "run", "--rm", "--network", "none", IMAGE, "sh", "-c",
+                 "id -u; ls -d /build-config /opt/riverbridge/web/index.html 2>&1",
+                 check=False).stdout
+    uid, *listing = inside.splitlines()
+    assert uid != "0" and "/opt/riverbridge/web/index.html" in listing, inside
+    assert "/build-config" not in listing, inside
+
+
 @pytest.mark.timeout(UP_TIMEOUT_S + HEALTHY_TIMEOUT_S + 600)
 def test_compose_up_builds_runs_and_serves_the_stack(engine: None, tmp_path: Path) -> None:
     timings: dict[str, float] = {}
@@ -172,6 +185,7 @@ def test_compose_up_builds_runs_and_serves_the_stack(engine: None, tmp_path: Pat
             assert f"\n{topic} " in report.stdout, report.stdout
         check_dashboard(port)
         check_metrics(port)
+        check_image()
     except BaseException:
         print(compose.logs())
         raise
