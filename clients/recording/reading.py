@@ -9,7 +9,7 @@ in file order (which is arrival order for riverbridge's recorder).
 from __future__ import annotations
 
 import logging
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Generator, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -43,7 +43,8 @@ def _message(schema: Schema, channel: Channel, message: Message) -> RecordedMess
                            bytes(message.data), message.log_time, message.publish_time)
 
 
-def read_recording(path: Path, wanted: Callable[[str], bool]) -> Iterator[RecordedMessage]:
+def read_recording(path: Path, wanted: Callable[[str], bool]
+                   ) -> Generator[RecordedMessage, None, None]:
     """The ROS 2 (``ros2msg``/``cdr``) messages of the topics ``wanted`` takes, in time order.
 
     Raises :class:`McapError` if ``path`` is not an MCAP file at all.
