@@ -12,6 +12,8 @@ from pathlib import Path
 from pydantic import ValidationError
 
 from bridge.config import MIB, BridgeConfig
+from bridge.dds.options import add_dds_options, dds_config_fields, print_config
+from bridge.errors import DdsStartError
 from bridge.server import run_bridge
 from schemas.process_tuning import freeze_startup_heap, tune_process
 
@@ -72,6 +74,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--web-root", type=Path, default=None, metavar="DIR",
                         help="built web dashboard to serve at http://HOST:PORT/ (default: "
                              "$RIVERBRIDGE_WEB_ROOT, else the repository's web/dist)")
+    add_dds_options(parser)
     return parser
 
 
@@ -83,6 +86,7 @@ def config_from_args(args: argparse.Namespace) -> BridgeConfig:
         send_queue=args.send_queue, interface_dirs=tuple(args.interfaces),
         offload_threshold_bytes=args.offload_threshold,
         web_root=args.web_root,
+        **dds_config_fields(args),
     )
 
 
@@ -113,6 +117,9 @@ def main(argv: list[str] | None = None) -> int:
         config = config_from_args(args)
     except ValidationError as exc:
         parser.error(str(exc))
+    if args.print_dds_config:
+        print(print_config(args))
+        return 0
     logging.basicConfig(level=args.log_level.upper(),
                         format="%(asctime)s %(levelname)s %(name)s: %(message)s")
     logger.setLevel(logging.INFO)  # the "listening on" line is always printed
@@ -120,5 +127,9 @@ def main(argv: list[str] | None = None) -> int:
     websockets_level = logging.DEBUG if args.log_level == "debug" else logging.WARNING
     logging.getLogger("websockets").setLevel(websockets_level)
     with contextlib.suppress(KeyboardInterrupt):
-        asyncio.run(serve_until_signalled(config))
+        try:
+            asyncio.run(serve_until_signalled(config))
+        except DdsStartError as exc:
+            logger.error("%s", exc)
+            return 1
     return 0

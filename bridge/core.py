@@ -55,11 +55,15 @@ class BridgeCore:
 
     # -- connections -------------------------------------------------------------------------
 
-    def connect(self, peer: str = "") -> int:
-        """Register a new client; returns its id (its node is `/rosbridge_client_<id>`)."""
+    def connect(self, peer: str = "", node: str | None = None) -> int:
+        """Register a new client; returns its id (its node is `/rosbridge_client_<id>`).
+
+        `node` names an in-process client of another middleware instead (a DDS mirror's
+        stand-in for a remote node): its ops and effects flow like a websocket client's.
+        """
         self.state.clients_ever += 1
         client_id = self.state.clients_ever
-        node = f"/rosbridge_client_{client_id}"
+        node = node or f"/rosbridge_client_{client_id}"
         self.state.sessions[client_id] = ClientSession(client_id, node, peer)
         logger.info("[%s] connected from %s", node, peer or "?")
         return client_id

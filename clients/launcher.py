@@ -82,6 +82,8 @@ class LaunchConfig(BaseModel):
     startup_timeout_s: float = Field(default=120.0, gt=0)
     # Per escalation step (SIGINT, then SIGTERM, then SIGKILL); the parts stop in ~1 s.
     stop_timeout_s: float = Field(default=10.0, gt=0)
+    # Extra bridge options (`riverbridge up --dds ...` passes its DDS options through).
+    bridge_args: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -110,7 +112,7 @@ def stack_components(config: LaunchConfig) -> tuple[Component, ...]:
         nav_args += ["--config", str(config.nav_config)]
     return (
         Component("bridge", "bridge", "bridge",
-                  ("--host", config.host, "--port", str(config.port))),
+                  ("--host", config.host, "--port", str(config.port), *config.bridge_args)),
         Component("sim", "simulator", "simulator", tuple(sim_args), SIMULATOR_TOPICS),
         Component("nav", "navigation", "navigation", tuple(nav_args), NAVIGATION_TOPICS),
     )

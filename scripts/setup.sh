@@ -18,6 +18,8 @@ command -v dockerd >/dev/null 2>&1 || missing+=(docker.io)
 command -v debootstrap >/dev/null 2>&1 || missing+=(debootstrap)
 # Debian's Chromium for the dashboard's browser tests (playwright-core drives it; no downloads)
 [ -x /usr/bin/chromium ] || missing+=(chromium)
+# iproute2's `ip` makes the two network namespaces of the DDS two-host test (tests/dds)
+command -v ip >/dev/null 2>&1 || missing+=(iproute2)
 if [ ${#missing[@]} -gt 0 ]; then
     echo "setup: installing ${missing[*]} from Debian's packages" >&2
     apt-get update -qq
