@@ -15,12 +15,15 @@ import sys
 from pathlib import Path
 
 from clients.launcher import (
+    Component,
     LaunchConfig,
     PrefixedLogHandler,
     PrefixedOutput,
     Supervisor,
     stack_components,
 )
+from clients.recording.components import recorder_component
+from clients.recording.record_cli import output_file
 
 log = logging.getLogger("clients.launcher")
 
@@ -76,6 +79,8 @@ def build_parser() -> argparse.ArgumentParser:
                         default=defaults.startup_timeout_s,
                         metavar="S", help="seconds for all three to become ready "
                         "(default %(default)s)")
+    parser.add_argument("--record", type=output_file, metavar="FILE.mcap",
+                        help="also record every topic into this MCAP file (riverbridge record)")
     parser.add_argument("--stop-timeout", type=positive_seconds, default=defaults.stop_timeout_s,
                         metavar="S", help="seconds per shutdown step (SIGINT, SIGTERM, SIGKILL; "
                         "default %(default)s)")
@@ -120,7 +125,8 @@ def config_from_args(args: argparse.Namespace) -> LaunchConfig:
                         bridge_args=dds_bridge_args(args))
 
 
-async def _supervise(config: LaunchConfig, output: PrefixedOutput) -> int:
+async def _supervise(config: LaunchConfig, output: PrefixedOutput,
+                     extra: tuple[Component, ...] = ()) -> int:
     stop = asyncio.Event()
     loop = asyncio.get_running_loop()
     for sig in STOP_SIGNALS:
@@ -130,7 +136,8 @@ async def _supervise(config: LaunchConfig, output: PrefixedOutput) -> int:
         output.write("up", f"all three ready; connect to {url} (Ctrl-C stops)")
 
     try:
-        supervisor = Supervisor(stack_components(config), config, output, on_ready=announce)
+        supervisor = Supervisor(stack_components(config) + extra, config, output,
+                                on_ready=announce)
         return await supervisor.run(stop)
     finally:
         for sig in STOP_SIGNALS:
@@ -146,7 +153,8 @@ def main(argv: list[str] | None = None) -> int:
     log.setLevel(logging.INFO)
     log.propagate = False
     try:
-        return asyncio.run(_supervise(config, output))
+        extra = (recorder_component(args.record),) if args.record else ()
+        return asyncio.run(_supervise(config, output, extra))
     finally:
         log.removeHandler(handler)
 
