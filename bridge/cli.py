@@ -58,6 +58,9 @@ def build_parser() -> argparse.ArgumentParser:
                         help="allow only topics matching this fnmatch pattern (repeatable)")
     parser.add_argument("--services-glob", action="append", default=[], metavar="PATTERN",
                         help="allow only services matching this fnmatch pattern (repeatable)")
+    parser.add_argument("--actions-glob", action="append", default=[], metavar="PATTERN",
+                        help="allow only actions matching this fnmatch pattern (repeatable; "
+                             "default: the --services-glob patterns)")
     parser.add_argument("--send-queue", type=positive_int, default=defaults.send_queue,
                         help="messages of one topic queued per client before its oldest is dropped "
                              "(default %(default)s)")
@@ -80,6 +83,7 @@ def config_from_args(args: argparse.Namespace) -> BridgeConfig:
         host=args.host, port=args.port, max_message_size=args.max_message_size,
         fragment_timeout_s=args.fragment_timeout, call_timeout_s=args.call_timeout,
         topics_glob=tuple(args.topics_glob), services_glob=tuple(args.services_glob),
+        actions_glob=tuple(args.actions_glob),
         send_queue=args.send_queue, interface_dirs=tuple(args.interfaces),
         offload_threshold_bytes=args.offload_threshold,
         web_root=args.web_root,

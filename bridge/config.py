@@ -32,6 +32,9 @@ class BridgeConfig(BaseModel):
     # fnmatch patterns gating topic and service names; empty = allow all (protocol §8).
     topics_glob: tuple[str, ...] = ()
     services_glob: tuple[str, ...] = ()
+    # fnmatch patterns gating action names (advertise_action, send_action_goal); empty = the
+    # services' patterns, since ROS 2 actions are services underneath (rosbridge gates none).
+    actions_glob: tuple[str, ...] = ()
     # Messages of one topic waiting for one client; past it that topic's oldest is dropped
     # (rosbridge 2026 write_queue_size idea, #1290): a few frames of the fastest sensor.
     send_queue: int = Field(default=16, gt=0)
@@ -46,3 +49,7 @@ class BridgeConfig(BaseModel):
     # Built web dashboard served at http://host:port/; None = $RIVERBRIDGE_WEB_ROOT or the
     # repository's web/dist (bridge.webapp.default_web_root).
     web_root: Path | None = None
+
+    def action_patterns(self) -> tuple[str, ...]:
+        """The globs actions must match: `actions_glob`, else `services_glob`."""
+        return self.actions_glob or self.services_glob

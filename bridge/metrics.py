@@ -27,7 +27,10 @@ class MetricsSnapshot:
 
 
 def escape_label(value: str) -> str:
-    """Label values escape backslash, double quote and newline (exposition format)."""
+    """Label values escape backslash, double quote and newline (exposition format); a string
+    with no UTF-8 form (a lone surrogate) is shown with a backslash escape, not a 500."""
+    if not value.isascii():
+        value = value.encode("utf-8", "backslashreplace").decode("utf-8")
     return value.replace("\\", "\\\\").replace('"', '\\"').replace("\n", "\\n")
 
 

@@ -24,6 +24,10 @@ JSON = "none"
 PNG = "png"
 CBOR = "cbor"
 CBOR_RAW = "cbor-raw"
+# Smallest outgoing fragment in characters; smaller requested sizes are raised to it. Smaller
+# fragments only multiply the envelope and the id each one repeats (amplification), and no
+# rosbridge client asks for less (ROS# sends 2^31 - 1: "never fragment").
+MIN_FRAGMENT_SIZE = 1000
 # Subscription compression precedence (protocol §4.4): the strongest wins among a client's ids.
 COMPRESSION_RANK = {JSON: 0, PNG: 1, CBOR: 2, CBOR_RAW: 3}
 

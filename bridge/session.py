@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from enum import IntEnum
 
+from bridge.problems import ProblemLog
 from bridge.subscription import Subscription
 
 
@@ -45,6 +46,7 @@ class ClientSession:
     services: set[str] = field(default_factory=set)
     actions: set[str] = field(default_factory=set)
     fragments: dict[object, FragmentBuffer] = field(default_factory=dict)
+    problems: ProblemLog = field(default_factory=ProblemLog)
 
     def fragment_chars(self) -> int:
         """Characters held in all of the client's incomplete fragment lists."""
