@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, SecretStr, model_validator
 
 MIB = 1024 * 1024
 
@@ -49,6 +49,26 @@ class BridgeConfig(BaseModel):
     # Built web dashboard served at http://host:port/; None = $RIVERBRIDGE_WEB_ROOT or the
     # repository's web/dist (bridge.webapp.default_web_root).
     web_root: Path | None = None
+    # Access control (bridge.access, docs/bridge.md "Security and hostile input").
+    # rosauth secret (first line of --auth-secret-file); None = no authentication, as ROS 2
+    # rosbridge. With it, every op before a valid `auth` op is refused (protocol §1.5).
+    auth_secret: SecretStr | None = None
+    # Seconds an `auth` op's `t` may differ from the bridge's clock (rosauth's default).
+    auth_window_s: float = Field(default=5.0, gt=0)
+    # TLS: serve wss:// (and the HTTP pages over https://) with this chain and key.
+    certfile: Path | None = None
+    keyfile: Path | None = None
+    # fnmatch globs of browser Origins allowed to open a websocket; empty = any. Handshakes
+    # without an Origin (not a browser) and from the bridge's own pages are always allowed.
+    allowed_origins: tuple[str, ...] = ()
+    # Most clients connected at once; None = no limit. More handshakes get HTTP 503.
+    max_clients: int | None = Field(default=None, gt=0)
+
+    @model_validator(mode="after")
+    def _tls_pair(self) -> BridgeConfig:
+        if (self.certfile is None) != (self.keyfile is None):
+            raise ValueError("certfile and keyfile must be given together")
+        return self
 
     def action_patterns(self) -> tuple[str, ...]:
         """The globs actions must match: `actions_glob`, else `services_glob`."""

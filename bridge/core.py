@@ -18,7 +18,16 @@ from bridge.effects import Effect
 from bridge.errors import BridgeError, InvalidNameError
 from bridge.inbound import PreparedMessage, RefusedFrame, decode_frame
 from bridge.names import absolute_name
-from bridge.ops import Handler, actions, fragments, levels, merge_tables, services, topics
+from bridge.ops import (
+    Handler,
+    actions,
+    auth,
+    fragments,
+    levels,
+    merge_tables,
+    services,
+    topics,
+)
 from bridge.outgoing import MIN_FRAGMENT_SIZE, TopicMessage, payload_size
 from bridge.rosapi import ROSAPI_SERVICES
 from bridge.session import ClientSession
@@ -34,7 +43,8 @@ from schemas.tracing import cdr_size, header_stamp_ns
 logger = logging.getLogger("bridge.core")
 
 OP_HANDLERS: dict[str, Handler] = merge_tables(
-    topics.HANDLERS, services.HANDLERS, actions.HANDLERS, fragments.HANDLERS, levels.HANDLERS)
+    topics.HANDLERS, services.HANDLERS, actions.HANDLERS, fragments.HANDLERS, levels.HANDLERS,
+    auth.HANDLERS)
 
 # Deadline keys are tuples whose first item selects the handler; the rest are its arguments.
 DEADLINE_HANDLERS: dict[str, Callable[..., None]] = {
@@ -62,7 +72,8 @@ class BridgeCore:
         self.state.clients_ever += 1
         client_id = self.state.clients_ever
         node = f"/rosbridge_client_{client_id}"
-        self.state.sessions[client_id] = ClientSession(client_id, node, peer)
+        self.state.sessions[client_id] = ClientSession(
+            client_id, node, peer, authenticated=self.state.config.auth_secret is None)
         logger.info("[%s] connected from %s", node, peer or "?")
         return client_id
 
@@ -143,7 +154,7 @@ class BridgeCore:
         """Handle one decoded message (and any message its fragments complete)."""
         ctx = Context(self.state, now_ns)
         session = self.state.sessions.get(client_id)
-        if session is None:
+        if session is None or session.closing:
             return []
         self._dispatch_guarded(ctx, session, message)
         while ctx.reassembled and client_id in self.state.sessions:
@@ -183,6 +194,10 @@ class BridgeCore:
             what = ("message without an op" if op_name is None
                     else f"Unknown operation: {safe_text(str(op_name), 60)}")
             ctx.problem(session, op_name, op_id, what)
+            return
+        if not session.authenticated and op_name != "auth":
+            answer_failed_request(ctx, session, message, "not authenticated: this bridge needs "
+                                  "a valid auth op (rosauth) before any other")
             return
         handler = OP_HANDLERS[op_name]
         try:

@@ -18,7 +18,9 @@ from dataclasses import dataclass
 
 from websockets.asyncio.server import Server, ServerConnection, serve
 from websockets.exceptions import ConnectionClosed
+from websockets.http11 import Request, Response
 
+from bridge.access import HandshakePolicy, scheme, tls_context
 from bridge.config import BridgeConfig
 from bridge.core import BridgeCore
 from bridge.effects import Close, Effect, Schedule, Send
@@ -42,6 +44,7 @@ CLOSE_TIMEOUT_S = 3.0
 # the bridge stops reading its requests: a client that calls without reading then waits on
 # TCP instead of growing the bridge's memory.
 ANSWER_BACKLOG = 256
+TRY_AGAIN_LATER = 1013  # RFC 6455: a handshake that raced past --max-clients
 
 
 class ClientLink:
@@ -76,6 +79,7 @@ class BridgeServer:
         self._server: Server | None = None
         self._closing: set[asyncio.Task[None]] = set()
         self.http = HttpRoutes()  # plain HTTP on the websocket port; others add routes
+        self.access = HandshakePolicy(config)  # Origin and client-limit checks (bridge.access)
         mount_webapp(self.http, config.web_root or default_web_root())
         self.telemetry = BridgeTelemetry(self)  # spans, stats service, /metrics
         self._telemetry_task: asyncio.Task[None] | None = None
@@ -90,7 +94,7 @@ class BridgeServer:
             self._handle, self.config.host, self.config.port,
             compression=None, max_size=self.config.max_message_size,
             write_limit=WRITE_HIGH_WATER, close_timeout=CLOSE_TIMEOUT_S,
-            process_request=self.http,
+            process_request=self._process_request, ssl=tls_context(self.config),
         )
         self._telemetry_task = asyncio.create_task(self.telemetry.run(self.apply),
                                                    name="bridge-telemetry")
@@ -115,9 +119,22 @@ class BridgeServer:
         self._timers.clear()
         self._pool.shutdown(wait=False, cancel_futures=True)
 
+    def _process_request(self, connection: ServerConnection, request: Request) -> Response | None:
+        """Refuse handshakes `bridge.access` rejects (403, 503); plain HTTP goes to the routes."""
+        if "websocket" in request.headers.get("Upgrade", "").lower():
+            refusal = self.access.refusal(request, len(self.links))
+            if refusal is not None:
+                logger.warning("refused a websocket handshake from %s: %s",
+                               connection.remote_address, refusal[1].strip())
+                return connection.respond(*refusal)
+        return self.http(connection, request)
+
     # -- one connection ----------------------------------------------------------------------
 
     async def _handle(self, ws: ServerConnection) -> None:
+        if self.config.max_clients is not None and len(self.links) >= self.config.max_clients:
+            await ws.close(TRY_AGAIN_LATER, "too many clients")
+            return
         peer = "{}:{}".format(*ws.remote_address[:2]) if ws.remote_address else ""
         client_id = self.core.connect(peer)
         link = self.links[client_id] = ClientLink(client_id, ws, self.config.send_queue)
@@ -240,7 +257,7 @@ class RunningBridge:
 
     @property
     def url(self) -> str:
-        return f"ws://{self.host}:{self.port}"
+        return f"{scheme(self.server.config)}://{self.host}:{self.port}"
 
     @property
     def core(self) -> BridgeCore:

@@ -47,6 +47,10 @@ class ClientSession:
     actions: set[str] = field(default_factory=set)
     fragments: dict[object, FragmentBuffer] = field(default_factory=dict)
     problems: ProblemLog = field(default_factory=ProblemLog)
+    # False until a valid rosauth `auth` op when the bridge has an auth secret.
+    authenticated: bool = True
+    # Set once the core asked the edge to close the connection: later frames are ignored.
+    closing: bool = False
 
     def fragment_chars(self) -> int:
         """Characters held in all of the client's incomplete fragment lists."""

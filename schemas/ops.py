@@ -258,6 +258,20 @@ class SetLevel(OpBase):
     level: Literal["info", "warning", "error", "none"]
 
 
+class Auth(OpBase):
+    """rosauth's `auth` op (schemas.rosauth); `t` and `end` are seconds or ROS times."""
+
+    op: Literal["auth"] = "auth"
+    id: Id = None
+    mac: StrictStr
+    client: StrictStr
+    dest: StrictStr
+    rand: StrictStr
+    t: Any
+    level: StrictStr
+    end: Any
+
+
 class Status(OpBase):
     op: Literal["status"] = "status"
     level: StrictStr
@@ -285,6 +299,7 @@ OpModel = (
     | ActionResult
     | AdvertiseAction
     | UnadvertiseAction
+    | Auth
 )
 Op = Annotated[OpModel, Field(discriminator="op")]
 
