@@ -7,7 +7,7 @@ reads; the edge builds the snapshot from the tracer and the send queues at reque
 from __future__ import annotations
 
 from collections.abc import Iterable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from bridge.tracing import TopicTraffic
 
@@ -24,6 +24,8 @@ class MetricsSnapshot:
     cpu_percent: float
     rss_bytes: int
     spans_discarded: int = 0
+    # Restarts per component as `riverbridge up` reports them (schemas.supervision).
+    restarts: Mapping[str, int] = field(default_factory=dict)
 
 
 def escape_label(value: str) -> str:
@@ -76,4 +78,8 @@ def render_metrics(snapshot: MetricsSnapshot) -> str:
     lines += _family("riverbridge_trace_spans_discarded_total", "counter",
                      "Trace spans discarded because the bounded span buffer was full.",
                      [("", snapshot.spans_discarded)])
+    if snapshot.restarts:
+        lines += _family("riverbridge_component_restarts_total", "counter",
+                         "Restarts of each component by riverbridge up (/riverbridge/restarts).",
+                         [(_labels(component=c), n) for c, n in sorted(snapshot.restarts.items())])
     return "\n".join(lines) + "\n"

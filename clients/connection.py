@@ -12,6 +12,7 @@ import json
 import logging
 import os
 import random
+import ssl
 import time
 import urllib.parse
 from collections.abc import Iterator
@@ -57,6 +58,9 @@ class TransportConfig(BaseModel):
     ping_timeout_s: float | None = 20.0
     auth_secret: SecretStr | None = Field(default_factory=auth_secret_from_env)
     """rosauth secret: when set, an ``auth`` op is the first frame of every connection."""
+    cafile: Path | None = None
+    """For ``wss://``: trust this certificate (PEM) instead of the default store (which
+    ``SSL_CERT_FILE`` may also point at)."""
 
 
 @contextmanager
@@ -76,8 +80,11 @@ async def open_once(url: str, config: TransportConfig, timeout_s: float) -> Clie
     For ``wss://`` the server certificate is checked against the default trust store, which
     ``SSL_CERT_FILE`` may point at (``riverbridge up --certfile`` does).
     """
+    tls = ssl.create_default_context(cafile=str(config.cafile)) if (
+        config.cafile is not None and url.startswith("wss:")) else None
     ws = await websockets.connect(
         url,
+        ssl=tls,
         compression=None,
         max_size=config.max_frame_bytes,
         max_queue=config.max_queued_frames,
