@@ -88,6 +88,9 @@ def build_parser() -> argparse.ArgumentParser:
                         "without Origin are not affected")
     parser.add_argument("--max-clients", type=positive_int, default=None, metavar="N",
                         help="refuse handshakes (503) while N clients are connected")
+    parser.add_argument("--reply-budget", type=positive_int, default=defaults.reply_budget_bytes,
+                        metavar="BYTES", help="unread answers (never dropped) a client may "
+                        "leave before it is closed with 1008 (default 32 MiB)")
     parser.add_argument("--web-root", type=Path, default=None, metavar="DIR",
                         help="built web dashboard to serve at http://HOST:PORT/ (default: "
                              "$RIVERBRIDGE_WEB_ROOT, else the repository's web/dist)")
@@ -106,6 +109,7 @@ def config_from_args(args: argparse.Namespace) -> BridgeConfig:
         auth_secret=None if args.auth_secret_file is None else read_secret(args.auth_secret_file),
         certfile=args.certfile, keyfile=args.keyfile,
         allowed_origins=tuple(args.allowed_origins), max_clients=args.max_clients,
+        reply_budget_bytes=args.reply_budget,
     )
 
 

@@ -63,6 +63,10 @@ class BridgeConfig(BaseModel):
     allowed_origins: tuple[str, ...] = ()
     # Most clients connected at once; None = no limit. More handshakes get HTTP 503.
     max_clients: int | None = Field(default=None, gt=0)
+    # Bytes of answers (never dropped) a client may leave unread before it is closed with
+    # 1008 (bridge.reply_budget). Half the inbound frame limit: ~300 full rosapi definition
+    # lists, and one larger request to a provider still passes on its own.
+    reply_budget_bytes: int = Field(default=32 * MIB, gt=0)
 
     @model_validator(mode="after")
     def _tls_pair(self) -> BridgeConfig:

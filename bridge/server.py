@@ -26,6 +26,7 @@ from bridge.core import BridgeCore
 from bridge.effects import Close, Effect, Schedule, Send
 from bridge.http import HttpRoutes
 from bridge.outgoing import Delivery, WireFrame, render
+from bridge.reply_budget import POLICY_VIOLATION, ReplyBudget
 from bridge.sendqueue import SendQueue
 from bridge.stats import BridgeTelemetry
 from bridge.webapp import default_web_root, mount_webapp
@@ -50,21 +51,35 @@ TRY_AGAIN_LATER = 1013  # RFC 6455: a handshake that raced past --max-clients
 class ClientLink:
     """The edge's half of one connection: websocket, send queue and writer task."""
 
-    def __init__(self, client_id: int, ws: ServerConnection, limit: int) -> None:
+    def __init__(self, client_id: int, ws: ServerConnection, limit: int,
+                 reply_budget_bytes: int) -> None:
         self.client_id = client_id
         self.ws = ws
         self.queue = SendQueue(limit)
+        self.replies = ReplyBudget(reply_budget_bytes)  # unread undroppable bytes
         self.ready = asyncio.Event()
         self.room = asyncio.Event()  # set while answers_waiting <= ANSWER_BACKLOG
         self.room.set()
         self.writer: asyncio.Task[None] | None = None
         self.frames_sent = 0
+        self.over_budget = False
 
-    def enqueue(self, send: Send) -> None:
+    def enqueue(self, send: Send) -> bool:
+        """Queue `send`; False when an answer takes the client past its reply budget."""
+        within = send.drop_key is None and self.replies.charge(reply_bytes(send))
         if self.queue.push(send) is not None:
             logger.debug("client %d: dropped oldest message of %s", self.client_id,
                          send.drop_key)
         self.ready.set()
+        return within or send.drop_key is not None
+
+
+def reply_bytes(send: Send) -> int:
+    """Wire bytes of an undroppable item (its frame is encoded once and kept)."""
+    try:
+        return len(send.item.frame().data)
+    except SchemaError:
+        return 0  # cannot be sent at all; the writer logs it
 
 
 class BridgeServer:
@@ -137,7 +152,8 @@ class BridgeServer:
             return
         peer = "{}:{}".format(*ws.remote_address[:2]) if ws.remote_address else ""
         client_id = self.core.connect(peer)
-        link = self.links[client_id] = ClientLink(client_id, ws, self.config.send_queue)
+        link = self.links[client_id] = ClientLink(client_id, ws, self.config.send_queue,
+                                                  self.config.reply_budget_bytes)
         link.writer = asyncio.create_task(self._write(link), name=f"bridge-writer-{client_id}")
         self.apply(self.telemetry.clients_changed())
         try:
@@ -196,6 +212,8 @@ class BridgeServer:
                     link.frames_sent += 1
             except ConnectionClosed:
                 return
+            if send.drop_key is None:
+                link.replies.credit(reply_bytes(send))
             if isinstance(send.item, Delivery):
                 self.telemetry.tracer.delivered(link.client_id, send.item,
                                                 sum(len(f.data) for f in frames), handed_ns)
@@ -218,8 +236,11 @@ class BridgeServer:
         for effect in effects:
             if isinstance(effect, Send):
                 link = self.links.get(effect.client_id)
-                if link is not None:
-                    link.enqueue(effect)
+                if link is not None and not link.enqueue(effect) and not link.over_budget:
+                    link.over_budget = True
+                    logger.warning("client %d: closing, %s", link.client_id,
+                                   link.replies.reason())
+                    self.apply([Close(link.client_id, POLICY_VIOLATION, link.replies.reason())])
             elif isinstance(effect, Schedule):
                 self._schedule(effect.key, effect.at_ns)
             elif isinstance(effect, Close):

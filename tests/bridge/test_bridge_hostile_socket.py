@@ -172,3 +172,30 @@ async def test_replies_are_never_much_larger_than_their_request(registry, op, by
         await ws.send(json.dumps(op))
         frames, bytes_out = await received_bytes(ws)
     assert 1 <= frames <= 10 and bytes_out < 10_000 < bytes_in
+
+
+@pytest.mark.timeout(60)
+async def test_a_client_that_asks_without_reading_is_closed_past_its_reply_budget(
+        registry, caplog):
+    """90-byte questions with ~100 kB answers, never read: closed at the budget (1008)."""
+    config = BridgeConfig(port=0, reply_budget_bytes=2 * 1024 * 1024)
+    async with run_bridge(config, registry) as bridge, websockets.connect(bridge.url) as good:
+        async with websockets.connect(bridge.url, max_queue=1) as greedy:
+            for index in range(40):  # every full definition makes the answer larger
+                await greedy.send(json.dumps({"op": "advertise", "topic": f"/m{index}",
+                                              "type": "visualization_msgs/msg/MarkerArray"}))
+            question = json.dumps({"op": "call_service", "id": "q",
+                                   "service": "/rosapi/topics_and_raw_types"})
+            with contextlib.suppress(ConnectionClosed):
+                for _ in range(2000):
+                    await greedy.send(question)
+                    if len(bridge.server.links) < 2:
+                        break
+            deadline = time.monotonic() + 20
+            while len(bridge.server.links) > 1:
+                assert time.monotonic() < deadline, "the greedy client is still connected"
+                await asyncio.sleep(0.05)
+        assert "MiB of replies unread (limit 2 MiB)" in caplog.text
+        reply = await answer(good, {"op": "call_service", "id": "g",
+                                    "service": "/rosapi/get_time"}, "g")
+        assert reply["result"] is True

@@ -96,6 +96,7 @@ def test_every_op_has_a_model():
         "png",
         "set_level",
         "status",
+        "auth",
         "send_action_goal",
         "cancel_action_goal",
         "action_feedback",
@@ -235,7 +236,8 @@ def test_several_problems_are_counted_in_the_same_line():
         (None, "expected a JSON object with an 'op' field, got NoneType"),
         ({"topic": "/x"}, "message has no 'op' field (keys: ['topic'])"),
         ({"op": 3}, "field 'op' must be a string, got 3"),
-        ({"op": "auth", "id": 9}, "unknown op 'auth'"),
+        ({"op": "authenticate", "id": 9}, "unknown op 'authenticate'"),
+        ({"op": "auth", "id": 9}, "auth: field 'mac' is required (and 6 more problem(s))"),
     ],
 )
 def test_non_ops(obj, message):
