@@ -35,6 +35,9 @@ CLIENT_FRAMES = {
     "roslibpy cancel_action_goal": '{"op": "cancel_action_goal", '
     '"id": "send_action_goal:/fib:7", "action": "/fibonacci"}',
     "roslibpy set_level": '{"op": "set_level", "level": "error", "id": 1}',
+    "roslibpy auth": '{"op": "auth", "mac": "ab12", "client": "192.168.1.101", '
+                     '"dest": "192.168.1.111", "rand": "xyz", "t": 1700000000.5, '
+                     '"level": "admin", "end": 1700003600}',
     "roslibjs subscribe cbor": '{"op":"subscribe","id":"subscribe:/scan:0b1c","type":'
     '"sensor_msgs/msg/LaserScan","topic":"/scan","compression":"cbor","throttle_rate":0,'
     '"queue_length":0}',
