@@ -6,6 +6,7 @@ import argparse
 import asyncio
 import contextlib
 import logging
+import os
 import signal
 import ssl
 from pathlib import Path
@@ -13,7 +14,7 @@ from pathlib import Path
 from pydantic import ValidationError
 
 from bridge.access import scheme, tls_context
-from bridge.config import MIB, BridgeConfig
+from bridge.config import AUTH_SECRET_ENV, MIB, BridgeConfig
 from bridge.server import run_bridge
 from schemas.process_tuning import freeze_startup_heap, tune_process
 from schemas.rosauth import read_secret
@@ -75,9 +76,12 @@ def build_parser() -> argparse.ArgumentParser:
                         choices=["debug", "info", "warning", "error", "critical"])
     parser.add_argument("--interfaces", action="append", default=[], type=Path, metavar="DIR",
                         help="extra folder of <pkg>/{msg,srv,action}/ definitions (repeatable)")
-    parser.add_argument("--auth-secret-file", type=Path, default=None, metavar="FILE",
+    secret_env = os.environ.get(AUTH_SECRET_ENV)
+    parser.add_argument("--auth-secret-file", type=Path, metavar="FILE",
+                        default=Path(secret_env) if secret_env else None,
                         help="require rosauth's auth op, checked against the secret on the "
-                             "file's first line, before any other op")
+                             f"file's first line, before any other op (default: "
+                             f"${AUTH_SECRET_ENV})")
     parser.add_argument("--certfile", type=Path, default=None, metavar="FILE",
                         help="TLS certificate chain (PEM): serve wss:// and https://")
     parser.add_argument("--keyfile", type=Path, default=None, metavar="FILE",

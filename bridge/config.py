@@ -12,6 +12,9 @@ from pathlib import Path
 from pydantic import BaseModel, ConfigDict, Field, SecretStr, model_validator
 
 MIB = 1024 * 1024
+#: Environment variable naming a rosauth secret file: the bridge's default --auth-secret-file,
+#: and what riverbridge's clients authenticate with (clients.connection).
+AUTH_SECRET_ENV = "RIVERBRIDGE_AUTH_SECRET_FILE"
 
 
 class BridgeConfig(BaseModel):

@@ -32,7 +32,8 @@ logger = logging.getLogger(__name__)
 
 AUTH_SECRET_ENV = "RIVERBRIDGE_AUTH_SECRET_FILE"
 """Environment variable naming a rosauth secret file: every connection then authenticates
-(`riverbridge up --auth-secret-file` sets it for the simulator and navigation)."""
+(`riverbridge up --auth-secret-file` sets it for the simulator and navigation; the bridge
+reads the same variable as its default ``--auth-secret-file``)."""
 
 
 def auth_secret_from_env() -> SecretStr | None:

@@ -159,3 +159,13 @@ def test_origins_and_the_client_limit():
                         "http://localhost:8080": 101, own: 101,
                         "https://evil.example.com": 403, "null": 403, "third client": 503}
     assert "Origin https://evil.example.com is not allowed" in log
+
+
+def test_the_secret_file_may_come_from_the_environment(secret_file, monkeypatch):
+    from bridge.cli import build_parser, config_from_args
+
+    monkeypatch.setenv("RIVERBRIDGE_AUTH_SECRET_FILE", str(secret_file))
+    config = config_from_args(build_parser().parse_args([]))
+    assert config.auth_secret is not None and config.auth_secret.get_secret_value() == SECRET
+    monkeypatch.setenv("RIVERBRIDGE_AUTH_SECRET_FILE", "")  # compose's empty default: off
+    assert config_from_args(build_parser().parse_args([])).auth_secret is None
