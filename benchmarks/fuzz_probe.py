@@ -16,7 +16,7 @@ operator's disk sees) and then:
    op.
 
 Usage: python benchmarks/fuzz_probe.py [--frames 20000] [--connections 4] [--rate 100]
-       [--checks] [--seed 0]
+       [--checks] [--seed 0] [--bridge-root /work/main] [--keep-log FILE]
 """
 
 from __future__ import annotations
@@ -26,6 +26,7 @@ import asyncio
 import contextlib
 import json
 import multiprocessing
+import os
 import re
 import statistics
 import subprocess
@@ -66,13 +67,18 @@ class BridgeProcess:
         return self.log_path.read_text("utf-8", errors="replace")
 
 
+BRIDGE_ROOT = ROOT  # --bridge-root: probe another checkout's bridge (before/after figures)
+
+
 @contextlib.contextmanager
 def bridge_process(args: Sequence[str], workdir: Path) -> Iterator[BridgeProcess]:
     log_path = workdir / f"bridge-{time.monotonic_ns()}.log"
+    env = {**os.environ, "PYTHONPATH": str(BRIDGE_ROOT)}
     with log_path.open("wb") as log:
         process = subprocess.Popen(
             [sys.executable, "-m", "bridge", "--host", "127.0.0.1", "--port", "0", *args],
-            cwd=ROOT, stdout=subprocess.DEVNULL, stderr=log, stdin=subprocess.DEVNULL)
+            cwd=BRIDGE_ROOT, env=env, stdout=subprocess.DEVNULL, stderr=log,
+            stdin=subprocess.DEVNULL)
     try:
         deadline = time.monotonic() + 120
         while not (match := LISTENING.search(log_path.read_text(errors="replace"))):
@@ -251,9 +257,12 @@ def http_status(port: int, path: str) -> int:
         return exc.code
 
 
-def healthy_drops(port: int) -> int:
-    with urllib.request.urlopen(f"http://127.0.0.1:{port}/metrics", timeout=5) as response:
-        text = response.read().decode()
+def healthy_drops(port: int) -> int | str:
+    try:
+        with urllib.request.urlopen(f"http://127.0.0.1:{port}/metrics", timeout=5) as response:
+            text = response.read().decode()
+    except urllib.error.HTTPError as exc:
+        return f"? (GET /metrics answered {exc.code})"
     return sum(int(float(line.rsplit(" ", 1)[1])) for line in text.splitlines()
                if line.startswith("riverbridge_dropped_total") and HEALTHY_TOPIC in line)
 
@@ -300,9 +309,9 @@ async def received_bytes(ws: websockets.ClientConnection, quiet_s: float = 1.0,
     """Bytes and frames received until the link is quiet for `quiet_s` (or `limit_s`)."""
     total = frames = 0
     deadline = time.monotonic() + limit_s
-    while time.monotonic() < deadline:
-        try:
-            frame = await asyncio.wait_for(ws.recv(), quiet_s)
+    while (left := deadline - time.monotonic()) > 0:
+        try:  # the first frame may take long: a reply split in 1-character fragments
+            frame = await asyncio.wait_for(ws.recv(), quiet_s if frames else left)
         except (TimeoutError, ConnectionClosed):
             break
         total += len(frame)
@@ -402,11 +411,16 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--connections", type=int, default=4)
     parser.add_argument("--rate", type=float, default=100.0, help="healthy messages per second")
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--bridge-root", type=Path, default=ROOT, metavar="DIR",
+                        help="checkout whose bridge is probed (default: this one), e.g. "
+                        "/work/main for the figures before")
     parser.add_argument("--keep-log", type=Path, default=None, metavar="FILE",
                         help="copy the fuzzed bridge's log here")
     parser.add_argument("--checks", action="store_true",
                         help="also run the poisoning, amplification, names and auth checks")
     args = parser.parse_args(argv)
+    global BRIDGE_ROOT
+    BRIDGE_ROOT = args.bridge_root.resolve()
     with tempfile.TemporaryDirectory(prefix="fuzz-probe-") as workdir:
         asyncio.run(run(args, Path(workdir)))
     return 0
