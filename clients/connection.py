@@ -81,11 +81,11 @@ async def open_once(url: str, config: TransportConfig, timeout_s: float) -> Clie
     For ``wss://`` the server certificate is checked against the default trust store, which
     ``SSL_CERT_FILE`` may point at (``riverbridge up --certfile`` does).
     """
-    tls = ssl.create_default_context(cafile=str(config.cafile)) if (
-        config.cafile is not None and url.startswith("wss:")) else None
+    tls = {"ssl": ssl.create_default_context(cafile=str(config.cafile))} if (
+        config.cafile is not None and url.startswith("wss:")) else {}
     ws = await websockets.connect(
         url,
-        ssl=tls,
+        **tls,
         compression=None,
         max_size=config.max_frame_bytes,
         max_queue=config.max_queued_frames,

@@ -10,12 +10,17 @@ import signal
 import threading
 import time
 from collections.abc import Iterator
+from pathlib import Path
 from typing import Any
 
 import pytest
 import roslibpy
+from pydantic import SecretStr
+from tls_certificates import make_certificate
 
 from clients import RosbridgeClient
+from clients.connection import TransportConfig
+from clients.errors import ServiceError
 from clients.launcher import NAVIGATION_TOPICS, SIMULATOR_TOPICS
 
 from .processes import UpProcess, kill_leftovers, wait_gone
@@ -170,3 +175,36 @@ def test_a_killed_child_is_restarted_and_imu_flows_again_within_5_s() -> None:
     slow = {t: round(s, 2) for t, s in recovery.items() if s > IMU_BACK_WITHIN_S}
     assert not slow, f"IMU back after {recovery} s"
     print(f"IMU back after a kill -9 of: {({t: round(s, 2) for t, s in recovery.items()})} s")
+
+
+def test_a_secured_stack_authenticates_its_parts_over_tls(tmp_path: Path) -> None:
+    """up --auth-secret-file --certfile/--keyfile: the simulator and navigation authenticate
+    over wss://; a client with the secret and the certificate is served, one without the
+    secret is refused."""
+    pair = make_certificate(tmp_path)
+    secret = tmp_path / "secret.txt"
+    secret.write_text("0123456789abcdef\n")
+    args = ("--auth-secret-file", str(secret), "--certfile", str(pair.certfile),
+            "--keyfile", str(pair.keyfile))
+    with running_up(*args) as up:
+        url = up.wait_ready()
+        assert url.startswith("wss://127.0.0.1:")
+
+        async def check() -> tuple[dict, dict]:
+            trusted = TransportConfig(auth_secret=SecretStr("0123456789abcdef"),
+                                      cafile=pair.certfile)
+            async with RosbridgeClient(url, encoding="cbor", transport=trusted) as client:
+                sub = await client.subscribe("/imu/data", "sensor_msgs/msg/Imu")
+                async with asyncio.timeout(60):
+                    imu = (await anext(aiter(sub))).msg
+            stranger = TransportConfig(auth_secret=None, cafile=pair.certfile)
+            async with RosbridgeClient(url, encoding="json", transport=stranger) as client:
+                with pytest.raises(ServiceError) as refused:
+                    await client.call_service("/rosapi/topics", {}, timeout=20)
+            return imu, {"refused": str(refused.value)}
+
+        imu, outcome = asyncio.run(check())
+        assert imu["header"]["frame_id"]
+        assert "not authenticated" in outcome["refused"]
+        assert up.stop(signal.SIGINT) == 0, up.text()
+    assert "authentication failed" not in up.text()
