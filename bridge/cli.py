@@ -11,7 +11,7 @@ import signal
 import ssl
 from pathlib import Path
 
-from pydantic import ValidationError
+from pydantic import SecretStr, ValidationError
 
 from bridge.access import scheme, tls_context
 from bridge.config import AUTH_SECRET_ENV, MIB, BridgeConfig
@@ -110,7 +110,8 @@ def config_from_args(args: argparse.Namespace) -> BridgeConfig:
         send_queue=args.send_queue, interface_dirs=tuple(args.interfaces),
         offload_threshold_bytes=args.offload_threshold,
         web_root=args.web_root,
-        auth_secret=None if args.auth_secret_file is None else read_secret(args.auth_secret_file),
+        auth_secret=None if args.auth_secret_file is None else SecretStr(
+            read_secret(args.auth_secret_file)),
         certfile=args.certfile, keyfile=args.keyfile,
         allowed_origins=tuple(args.allowed_origins), max_clients=args.max_clients,
         reply_budget_bytes=args.reply_budget,

@@ -18,6 +18,7 @@ import urllib.parse
 from collections.abc import Iterator
 from contextlib import contextmanager
 from pathlib import Path
+from typing import Any
 
 import websockets
 from pydantic import BaseModel, ConfigDict, Field, SecretStr
@@ -81,11 +82,12 @@ async def open_once(url: str, config: TransportConfig, timeout_s: float) -> Clie
     For ``wss://`` the server certificate is checked against the default trust store, which
     ``SSL_CERT_FILE`` may point at (``riverbridge up --certfile`` does).
     """
-    tls = {"ssl": ssl.create_default_context(cafile=str(config.cafile))} if (
-        config.cafile is not None and url.startswith("wss:")) else {}
+    options: dict[str, Any] = {}  # websockets refuses an explicit ssl=None for wss://
+    if config.cafile is not None and url.startswith("wss:"):
+        options["ssl"] = ssl.create_default_context(cafile=str(config.cafile))
     ws = await websockets.connect(
         url,
-        **tls,
+        **options,
         compression=None,
         max_size=config.max_frame_bytes,
         max_queue=config.max_queued_frames,
