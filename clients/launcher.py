@@ -69,6 +69,7 @@ MALLOC_ENV: Mapping[str, str] = {
 
 _LISTENING = re.compile(rb"listening on wss?://(?P<host>\S+?):(?P<port>\d+)")
 _POLL_S = 0.25  # readiness probe period: cheap (one rosapi round trip per topic)
+_EXIT_POLL_S = 0.05  # how often a child's exit is looked for (see Child.wait)
 _LINE_LIMIT = 1 << 20  # longest log line read in one piece; longer ones are split
 _WILDCARD_TO_LOOPBACK = {"0.0.0.0": "127.0.0.1", "": "127.0.0.1", "::": "::1"}
 _COLOURS = {"bridge": "36", "sim": "32", "nav": "35", "up": "1"}  # ANSI: cyan, green, magenta
@@ -326,11 +327,16 @@ class Child:
         """Wait for the exit and for the last log line to be written; the exit code.
 
         What the child left in its process group (navigation's LIDAR worker pool, after a
-        kill -9) is killed: it would hold the output pipe open, and its memory, forever.
+        kill -9) is killed at once: it holds the output pipe, and its memory, for seconds
+        after the child is gone. ``Process.wait()`` (Python 3.11) waits for that pipe too, so
+        the exit is taken from ``returncode``, which is set the moment the child is reaped.
         """
-        code = await self.process.wait()
+        while self.process.returncode is None:
+            await asyncio.sleep(_EXIT_POLL_S)
+        code = self.process.returncode
         with contextlib.suppress(ProcessLookupError, PermissionError):
             os.killpg(self.pid, signal.SIGKILL)
+        await self.process.wait()
         if self._pump is not None:
             await asyncio.shield(self._pump)  # a cancelled waiter must not stop the pump
         return code
