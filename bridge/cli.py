@@ -15,6 +15,8 @@ from pydantic import SecretStr, ValidationError
 
 from bridge.access import scheme, tls_context
 from bridge.config import AUTH_SECRET_ENV, MIB, BridgeConfig
+from bridge.dds.options import add_dds_options, dds_config_fields, print_config
+from bridge.errors import DdsStartError
 from bridge.server import run_bridge
 from schemas.process_tuning import freeze_startup_heap, tune_process
 from schemas.rosauth import read_secret
@@ -98,6 +100,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--web-root", type=Path, default=None, metavar="DIR",
                         help="built web dashboard to serve at http://HOST:PORT/ (default: "
                              "$RIVERBRIDGE_WEB_ROOT, else the repository's web/dist)")
+    add_dds_options(parser)
     return parser
 
 
@@ -115,6 +118,7 @@ def config_from_args(args: argparse.Namespace) -> BridgeConfig:
         certfile=args.certfile, keyfile=args.keyfile,
         allowed_origins=tuple(args.allowed_origins), max_clients=args.max_clients,
         reply_budget_bytes=args.reply_budget,
+        **dds_config_fields(args),
     )
 
 
@@ -150,6 +154,9 @@ def main(argv: list[str] | None = None) -> int:
         tls_context(config)  # a certificate that does not load fails here, not at start-up
     except (ValidationError, ValueError, OSError, ssl.SSLError) as exc:
         parser.error(str(exc))
+    if args.print_dds_config:
+        print(print_config(args))
+        return 0
     logging.basicConfig(level=args.log_level.upper(),
                         format="%(asctime)s %(levelname)s %(name)s: %(message)s")
     logger.setLevel(logging.INFO)  # the "listening on" line is always printed
@@ -157,5 +164,9 @@ def main(argv: list[str] | None = None) -> int:
     websockets_level = logging.DEBUG if args.log_level == "debug" else logging.WARNING
     logging.getLogger("websockets").setLevel(websockets_level)
     with contextlib.suppress(KeyboardInterrupt):
-        asyncio.run(serve_until_signalled(config))
+        try:
+            asyncio.run(serve_until_signalled(config))
+        except DdsStartError as exc:
+            logger.error("%s", exc)
+            return 1
     return 0

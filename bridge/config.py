@@ -8,6 +8,7 @@ design asks for more headroom: the thesis' LIDAR scan (Table 4.3, ~345,000 point
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Annotated, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, SecretStr, model_validator
 
@@ -52,6 +53,21 @@ class BridgeConfig(BaseModel):
     # Built web dashboard served at http://host:port/; None = $RIVERBRIDGE_WEB_ROOT or the
     # repository's web/dist (bridge.webapp.default_web_root).
     web_root: Path | None = None
+    # ROS 2 over DDS (docs/ros2.md): with `dds` the bridge joins DDS domain `dds_domain` with
+    # Cyclone DDS and mirrors topics and services the way ROS 2 puts them on the wire. DDS
+    # traffic stays on `dds_interface` (the loopback unless told otherwise), discovery goes to
+    # the listed unicast `dds_peers` (127.0.0.1 on `lo`), multicast is off unless asked for.
+    dds: bool = False
+    # 0..232: Cyclone's default port mapping (7400 + 250 * domain) ends at domain 232.
+    dds_domain: int = Field(default=0, ge=0, le=232)
+    dds_interface: str = Field(default="lo", pattern=r"^[A-Za-z0-9._@-]+$")
+    dds_peers: tuple[Annotated[str, Field(pattern=r"^[A-Za-z0-9._:\[\]-]+$")], ...] = ()
+    dds_multicast: Literal["false", "spdp", "true"] = "false"
+    # The bridge's ROS 2 node on the domain; "" = /riverbridge_<8 hex digits of its GUID>.
+    dds_node: str = Field(default="", pattern=r"^(/?[A-Za-z_][A-Za-z0-9_]*)*$")
+    # Large-sample tuning of Cyclone (socket buffers, writer history cache; bridge.dds
+    # .cyclone_xml); off only to measure what it buys (benchmarks/dds.py).
+    dds_tuned: bool = True
     # Access control (bridge.access, docs/bridge.md "Security and hostile input").
     # rosauth secret (first line of --auth-secret-file); None = no authentication, as ROS 2
     # rosbridge. With it, every op before a valid `auth` op is refused (protocol §1.5).

@@ -56,6 +56,8 @@ class BridgeState:
         self.pending_goals: dict[str, PendingGoal] = {}
         self.params: dict[str, str] = {}
         self.sinks: list[MessageSink] = [LocalFanout()]
+        # Nodes another middleware knows (a DDS domain's ROS 2 nodes), for rosapi's listings.
+        self.external_nodes: set[str] = set()
         # Services the bridge answers itself, name -> RosapiService (set by the core).
         self.rosapi: dict[str, Any] = {}
         self.clients_ever = 0

@@ -67,13 +67,20 @@ class BridgeCore:
 
     # -- connections -------------------------------------------------------------------------
 
-    def connect(self, peer: str = "") -> int:
-        """Register a new client; returns its id (its node is `/rosbridge_client_<id>`)."""
+    def connect(self, peer: str = "", node: str | None = None) -> int:
+        """Register a new client; returns its id (its node is `/rosbridge_client_<id>`).
+
+        `node` names an in-process client of another middleware instead (a DDS mirror's
+        stand-in for a remote node): its ops and effects flow like a websocket client's.
+        """
         self.state.clients_ever += 1
         client_id = self.state.clients_ever
-        node = f"/rosbridge_client_{client_id}"
-        self.state.sessions[client_id] = ClientSession(
-            client_id, node, peer, authenticated=self.state.config.auth_secret is None)
+        # An in-process client of another middleware (`node` given) is trusted; a websocket
+        # client must authenticate first when the bridge has an auth secret.
+        authenticated = node is not None or self.state.config.auth_secret is None
+        node = node or f"/rosbridge_client_{client_id}"
+        self.state.sessions[client_id] = ClientSession(client_id, node, peer,
+                                                       authenticated=authenticated)
         logger.info("[%s] connected from %s", node, peer or "?")
         return client_id
 

@@ -12,9 +12,10 @@ import asyncio
 import contextlib
 import logging
 import time
-from collections.abc import AsyncIterator, Hashable
+from collections.abc import AsyncIterator, Callable, Hashable
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
+from typing import Any
 
 from websockets.asyncio.server import Server, ServerConnection, serve
 from websockets.exceptions import ConnectionClosed
@@ -98,6 +99,8 @@ class BridgeServer:
         mount_webapp(self.http, config.web_root or default_web_root())
         self.telemetry = BridgeTelemetry(self)  # spans, stats service, /metrics
         self._telemetry_task: asyncio.Task[None] | None = None
+        # In-process clients (a DDS mirror's stand-ins): client id -> who takes their sends.
+        self.internal_clients: dict[int, Callable[[Send], None]] = {}
 
     @property
     def port(self) -> int:
@@ -236,11 +239,15 @@ class BridgeServer:
         for effect in effects:
             if isinstance(effect, Send):
                 link = self.links.get(effect.client_id)
-                if link is not None and not link.enqueue(effect) and not link.over_budget:
-                    link.over_budget = True
-                    logger.warning("client %d: closing, %s", link.client_id,
-                                   link.replies.reason())
-                    self.apply([Close(link.client_id, POLICY_VIOLATION, link.replies.reason())])
+                if link is not None:
+                    if not link.enqueue(effect) and not link.over_budget:
+                        link.over_budget = True
+                        logger.warning("client %d: closing, %s", link.client_id,
+                                       link.replies.reason())
+                        self.apply([Close(link.client_id, POLICY_VIOLATION,
+                                          link.replies.reason())])
+                elif effect.client_id in self.internal_clients:
+                    self.internal_clients[effect.client_id](effect)
             elif isinstance(effect, Schedule):
                 self._schedule(effect.key, effect.at_ns)
             elif isinstance(effect, Close):
@@ -275,6 +282,7 @@ class RunningBridge:
     host: str
     port: int
     server: BridgeServer
+    dds: Any = None  # the DDS mirror (bridge.dds.mirror.DdsMirror) when config.dds
 
     @property
     def url(self) -> str:
@@ -296,9 +304,17 @@ async def run_bridge(config: BridgeConfig,
         registry = TypeRegistry.with_defaults(config.interface_dirs)
     server = BridgeServer(config, BridgeCore(config, registry))
     await server.start()
+    mirror = None
     try:
-        yield RunningBridge(config.host, server.port, server)
+        if config.dds:  # imported only when asked: Cyclone DDS loads a C library
+            from bridge.dds.mirror import DdsMirror
+            joining = DdsMirror(server)
+            await joining.start()
+            mirror = joining
+        yield RunningBridge(config.host, server.port, server, mirror)
     finally:
+        if mirror is not None:
+            await mirror.stop()
         await server.stop()
 
 

@@ -100,6 +100,8 @@ class LaunchConfig(BaseModel):
     keyfile: Path | None = None
     allowed_origins: tuple[str, ...] = ()
     max_clients: int | None = Field(default=None, gt=0)
+    # Extra bridge options (`riverbridge up --dds ...` passes its DDS options through).
+    bridge_args: tuple[str, ...] = ()
 
     @property
     def scheme(self) -> str:
@@ -146,7 +148,7 @@ def stack_components(config: LaunchConfig) -> tuple[Component, ...]:
     return (
         Component("bridge", "bridge", "bridge",
                   ("--host", config.host, "--port", str(config.port),
-                   *config.bridge_access_args())),
+                   *config.bridge_access_args(), *config.bridge_args)),
         Component("sim", "simulator", "simulator", tuple(sim_args), SIMULATOR_TOPICS),
         Component("nav", "navigation", "navigation", tuple(nav_args), NAVIGATION_TOPICS),
     )

@@ -119,7 +119,38 @@ def build_parser() -> argparse.ArgumentParser:
                         help="restart a component that dies: on-failure (non-zero exit or a "
                         "signal), always, or never (then up stops; default %(default)s)")
     add_access_arguments(parser)
+    add_dds_options(parser)
     return parser
+
+
+def _domain(text: str) -> str:
+    if not text.isdigit() or not 0 <= int(text) <= 232:
+        raise argparse.ArgumentTypeError(f"must be a DDS domain id 0..232, got {text!r}")
+    return text
+
+
+def add_dds_options(parser: argparse.ArgumentParser) -> None:
+    """The bridge's DDS options, passed through to it (docs/ros2.md)."""
+    group = parser.add_argument_group("ROS 2 over DDS (passed to the bridge; docs/ros2.md)")
+    group.add_argument("--dds", action="store_true",
+                       help="the bridge joins a ROS 2 DDS domain with Cyclone DDS")
+    group.add_argument("--domain", type=_domain, metavar="N",
+                       help="DDS domain id (bridge default: $ROS_DOMAIN_ID or 0)")
+    group.add_argument("--dds-interface", metavar="NAME",
+                       help="the only network interface DDS may use (bridge default: lo)")
+    group.add_argument("--dds-peer", action="append", default=[], metavar="ADDR",
+                       help="unicast discovery peer (repeatable)")
+
+
+def dds_bridge_args(args: argparse.Namespace) -> tuple[str, ...]:
+    extra = ["--dds"] if args.dds else []
+    if args.domain is not None:
+        extra += ["--domain", args.domain]
+    if args.dds_interface is not None:
+        extra += ["--dds-interface", args.dds_interface]
+    for peer in args.dds_peer:
+        extra += ["--dds-peer", peer]
+    return tuple(extra)
 
 
 def config_from_args(args: argparse.Namespace) -> LaunchConfig:
@@ -129,7 +160,8 @@ def config_from_args(args: argparse.Namespace) -> LaunchConfig:
                         restart=args.restart, auth_secret_file=args.auth_secret_file,
                         certfile=args.certfile, keyfile=args.keyfile,
                         allowed_origins=tuple(args.allowed_origins),
-                        max_clients=args.max_clients)
+                        max_clients=args.max_clients,
+                        bridge_args=dds_bridge_args(args))
 
 
 async def _supervise(config: LaunchConfig, output: PrefixedOutput) -> int:

@@ -15,6 +15,9 @@ command -v npm >/dev/null 2>&1 || missing+=(npm)
 command -v docker-compose >/dev/null 2>&1 || missing+=(docker-compose)
 # Debian's Chromium for the dashboard's browser tests (playwright-core drives it; no downloads)
 [ -x /usr/bin/chromium ] || missing+=(chromium)
+# iproute2: `ip` makes the two network namespaces of the DDS two-host test (tests/dds), `ss`
+# reads the kernel's byte counters of the stack's sockets for the report
+{ command -v ip && command -v ss; } >/dev/null 2>&1 || missing+=(iproute2)
 if [ ${#missing[@]} -gt 0 ]; then
     echo "setup: installing ${missing[*]} from Debian's packages" >&2
     apt-get update -qq

@@ -46,7 +46,9 @@ def id_key(raw: Any) -> Any:
 def handle_advertise(ctx: Context, session: ClientSession, op: Any) -> None:
     name = topic_name(ctx, op.topic)
     declare(ctx, name, message_type(ctx, op.type))
-    ctx.state.graph.add_publisher(name, session.node, id_key(op.id), op.latch)
+    entry = ctx.state.graph.add_publisher(name, session.node, id_key(op.id), op.latch)
+    if op.qos:
+        entry.qos[session.node] = op.qos
     session.published.add(name)
 
 
