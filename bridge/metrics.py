@@ -12,7 +12,7 @@ in name order.
 from __future__ import annotations
 
 from collections.abc import Iterator, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from prometheus_client import (
     CollectorRegistry,
@@ -39,6 +39,16 @@ class MetricsSnapshot:
     cpu_percent: float
     rss_bytes: int
     spans_discarded: int = 0
+    # Restarts per component as `riverbridge up` reports them (schemas.supervision).
+    restarts: Mapping[str, int] = field(default_factory=dict)
+
+
+def safe_label(value: str) -> str:
+    """A label value that has a UTF-8 form: a lone surrogate (a client's odd topic name) is
+    shown backslash-escaped instead of failing the whole page with a 500."""
+    if value.isascii():
+        return value
+    return value.encode("utf-8", "backslashreplace").decode("utf-8")
 
 
 class SnapshotCollector:
@@ -57,18 +67,19 @@ class SnapshotCollector:
                                    "topic.", labels=["topic", "direction"])
         for direction in ("in", "out"):
             for topic, traffic in topics:
-                messages.add_metric([topic, direction], getattr(traffic, f"messages_{direction}"))
-                wire.add_metric([topic, direction], getattr(traffic, f"wire_bytes_{direction}"))
+                labels = [safe_label(topic), direction]
+                messages.add_metric(labels, getattr(traffic, f"messages_{direction}"))
+                wire.add_metric(labels, getattr(traffic, f"wire_bytes_{direction}"))
         payload = CounterMetricFamily(
             "riverbridge_payload_bytes", "Serialized ROS 2 (CDR) bytes of the stamped messages "
             "published, per topic.", labels=["topic"])
         for topic, traffic in topics:
-            payload.add_metric([topic], traffic.payload_bytes_in)
+            payload.add_metric([safe_label(topic)], traffic.payload_bytes_in)
         dropped = CounterMetricFamily(
             "riverbridge_dropped", "Messages dropped for a slow subscriber (send queue or "
             "subscription queue), per topic and subscriber.", labels=["topic", "subscriber"])
         for (topic, subscriber), count in sorted(snapshot.drops.items()):
-            dropped.add_metric([topic, subscriber], count)
+            dropped.add_metric([safe_label(topic), safe_label(subscriber)], count)
         yield from (messages, wire, payload, dropped)
         yield GaugeMetricFamily("riverbridge_clients", "Connected websocket clients.",
                                 value=snapshot.clients)
@@ -80,6 +91,13 @@ class SnapshotCollector:
         yield CounterMetricFamily("riverbridge_trace_spans_discarded", "Trace spans discarded "
                                   "because the bounded span buffer was full.",
                                   value=snapshot.spans_discarded)
+        if snapshot.restarts:
+            restarts = CounterMetricFamily(
+                "riverbridge_component_restarts", "Restarts of each component by riverbridge up "
+                "(/riverbridge/restarts).", labels=["component"])
+            for component, count in sorted(snapshot.restarts.items()):
+                restarts.add_metric([safe_label(component)], count)
+            yield restarts
 
 
 def render_metrics(snapshot: MetricsSnapshot) -> str:
