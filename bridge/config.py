@@ -10,9 +10,12 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Annotated, Literal
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, SecretStr, model_validator
 
 MIB = 1024 * 1024
+#: Environment variable naming a rosauth secret file: the bridge's default --auth-secret-file,
+#: and what riverbridge's clients authenticate with (clients.connection).
+AUTH_SECRET_ENV = "RIVERBRIDGE_AUTH_SECRET_FILE"
 
 
 class BridgeConfig(BaseModel):
@@ -33,6 +36,9 @@ class BridgeConfig(BaseModel):
     # fnmatch patterns gating topic and service names; empty = allow all (protocol §8).
     topics_glob: tuple[str, ...] = ()
     services_glob: tuple[str, ...] = ()
+    # fnmatch patterns gating action names (advertise_action, send_action_goal); empty = the
+    # services' patterns, since ROS 2 actions are services underneath (rosbridge gates none).
+    actions_glob: tuple[str, ...] = ()
     # Messages of one topic waiting for one client; past it that topic's oldest is dropped
     # (rosbridge 2026 write_queue_size idea, #1290): a few frames of the fastest sensor.
     send_queue: int = Field(default=16, gt=0)
@@ -62,3 +68,31 @@ class BridgeConfig(BaseModel):
     # Large-sample tuning of Cyclone (socket buffers, writer history cache; bridge.dds
     # .cyclone_xml); off only to measure what it buys (benchmarks/dds.py).
     dds_tuned: bool = True
+    # Access control (bridge.access, docs/bridge.md "Security and hostile input").
+    # rosauth secret (first line of --auth-secret-file); None = no authentication, as ROS 2
+    # rosbridge. With it, every op before a valid `auth` op is refused (protocol §1.5).
+    auth_secret: SecretStr | None = None
+    # Seconds an `auth` op's `t` may differ from the bridge's clock (rosauth's default).
+    auth_window_s: float = Field(default=5.0, gt=0)
+    # TLS: serve wss:// (and the HTTP pages over https://) with this chain and key.
+    certfile: Path | None = None
+    keyfile: Path | None = None
+    # fnmatch globs of browser Origins allowed to open a websocket; empty = any. Handshakes
+    # without an Origin (not a browser) and from the bridge's own pages are always allowed.
+    allowed_origins: tuple[str, ...] = ()
+    # Most clients connected at once; None = no limit. More handshakes get HTTP 503.
+    max_clients: int | None = Field(default=None, gt=0)
+    # Bytes of answers (never dropped) a client may leave unread before it is closed with
+    # 1008 (bridge.reply_budget). Half the inbound frame limit: ~300 full rosapi definition
+    # lists, and one larger request to a provider still passes on its own.
+    reply_budget_bytes: int = Field(default=32 * MIB, gt=0)
+
+    @model_validator(mode="after")
+    def _tls_pair(self) -> BridgeConfig:
+        if (self.certfile is None) != (self.keyfile is None):
+            raise ValueError("certfile and keyfile must be given together")
+        return self
+
+    def action_patterns(self) -> tuple[str, ...]:
+        """The globs actions must match: `actions_glob`, else `services_glob`."""
+        return self.actions_glob or self.services_glob

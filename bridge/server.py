@@ -19,12 +19,15 @@ from typing import Any
 
 from websockets.asyncio.server import Server, ServerConnection, serve
 from websockets.exceptions import ConnectionClosed
+from websockets.http11 import Request, Response
 
+from bridge.access import HandshakePolicy, scheme, tls_context
 from bridge.config import BridgeConfig
 from bridge.core import BridgeCore
 from bridge.effects import Close, Effect, Schedule, Send
 from bridge.http import HttpRoutes
 from bridge.outgoing import Delivery, WireFrame, render
+from bridge.reply_budget import POLICY_VIOLATION, ReplyBudget
 from bridge.sendqueue import SendQueue
 from bridge.stats import BridgeTelemetry
 from bridge.webapp import default_web_root, mount_webapp
@@ -43,26 +46,41 @@ CLOSE_TIMEOUT_S = 3.0
 # the bridge stops reading its requests: a client that calls without reading then waits on
 # TCP instead of growing the bridge's memory.
 ANSWER_BACKLOG = 256
+TRY_AGAIN_LATER = 1013  # RFC 6455: a handshake that raced past --max-clients
 
 
 class ClientLink:
     """The edge's half of one connection: websocket, send queue and writer task."""
 
-    def __init__(self, client_id: int, ws: ServerConnection, limit: int) -> None:
+    def __init__(self, client_id: int, ws: ServerConnection, limit: int,
+                 reply_budget_bytes: int) -> None:
         self.client_id = client_id
         self.ws = ws
         self.queue = SendQueue(limit)
+        self.replies = ReplyBudget(reply_budget_bytes)  # unread undroppable bytes
         self.ready = asyncio.Event()
         self.room = asyncio.Event()  # set while answers_waiting <= ANSWER_BACKLOG
         self.room.set()
         self.writer: asyncio.Task[None] | None = None
         self.frames_sent = 0
+        self.over_budget = False
 
-    def enqueue(self, send: Send) -> None:
+    def enqueue(self, send: Send) -> bool:
+        """Queue `send`; False when an answer takes the client past its reply budget."""
+        within = send.drop_key is None and self.replies.charge(reply_bytes(send))
         if self.queue.push(send) is not None:
             logger.debug("client %d: dropped oldest message of %s", self.client_id,
                          send.drop_key)
         self.ready.set()
+        return within or send.drop_key is not None
+
+
+def reply_bytes(send: Send) -> int:
+    """Wire bytes of an undroppable item (its frame is encoded once and kept)."""
+    try:
+        return len(send.item.frame().data)
+    except SchemaError:
+        return 0  # cannot be sent at all; the writer logs it
 
 
 class BridgeServer:
@@ -77,6 +95,7 @@ class BridgeServer:
         self._server: Server | None = None
         self._closing: set[asyncio.Task[None]] = set()
         self.http = HttpRoutes()  # plain HTTP on the websocket port; others add routes
+        self.access = HandshakePolicy(config)  # Origin and client-limit checks (bridge.access)
         mount_webapp(self.http, config.web_root or default_web_root())
         self.telemetry = BridgeTelemetry(self)  # spans, stats service, /metrics
         self._telemetry_task: asyncio.Task[None] | None = None
@@ -93,7 +112,7 @@ class BridgeServer:
             self._handle, self.config.host, self.config.port,
             compression=None, max_size=self.config.max_message_size,
             write_limit=WRITE_HIGH_WATER, close_timeout=CLOSE_TIMEOUT_S,
-            process_request=self.http,
+            process_request=self._process_request, ssl=tls_context(self.config),
         )
         self._telemetry_task = asyncio.create_task(self.telemetry.run(self.apply),
                                                    name="bridge-telemetry")
@@ -118,12 +137,26 @@ class BridgeServer:
         self._timers.clear()
         self._pool.shutdown(wait=False, cancel_futures=True)
 
+    def _process_request(self, connection: ServerConnection, request: Request) -> Response | None:
+        """Refuse handshakes `bridge.access` rejects (403, 503); plain HTTP goes to the routes."""
+        if "websocket" in request.headers.get("Upgrade", "").lower():
+            refusal = self.access.refusal(request, len(self.links))
+            if refusal is not None:
+                logger.warning("refused a websocket handshake from %s: %s",
+                               connection.remote_address, refusal[1].strip())
+                return connection.respond(*refusal)
+        return self.http(connection, request)
+
     # -- one connection ----------------------------------------------------------------------
 
     async def _handle(self, ws: ServerConnection) -> None:
+        if self.config.max_clients is not None and len(self.links) >= self.config.max_clients:
+            await ws.close(TRY_AGAIN_LATER, "too many clients")
+            return
         peer = "{}:{}".format(*ws.remote_address[:2]) if ws.remote_address else ""
         client_id = self.core.connect(peer)
-        link = self.links[client_id] = ClientLink(client_id, ws, self.config.send_queue)
+        link = self.links[client_id] = ClientLink(client_id, ws, self.config.send_queue,
+                                                  self.config.reply_budget_bytes)
         link.writer = asyncio.create_task(self._write(link), name=f"bridge-writer-{client_id}")
         self.apply(self.telemetry.clients_changed())
         try:
@@ -182,6 +215,8 @@ class BridgeServer:
                     link.frames_sent += 1
             except ConnectionClosed:
                 return
+            if send.drop_key is None:
+                link.replies.credit(reply_bytes(send))
             if isinstance(send.item, Delivery):
                 self.telemetry.tracer.delivered(link.client_id, send.item,
                                                 sum(len(f.data) for f in frames), handed_ns)
@@ -205,7 +240,12 @@ class BridgeServer:
             if isinstance(effect, Send):
                 link = self.links.get(effect.client_id)
                 if link is not None:
-                    link.enqueue(effect)
+                    if not link.enqueue(effect) and not link.over_budget:
+                        link.over_budget = True
+                        logger.warning("client %d: closing, %s", link.client_id,
+                                       link.replies.reason())
+                        self.apply([Close(link.client_id, POLICY_VIOLATION,
+                                          link.replies.reason())])
                 elif effect.client_id in self.internal_clients:
                     self.internal_clients[effect.client_id](effect)
             elif isinstance(effect, Schedule):
@@ -246,7 +286,7 @@ class RunningBridge:
 
     @property
     def url(self) -> str:
-        return f"ws://{self.host}:{self.port}"
+        return f"{scheme(self.server.config)}://{self.host}:{self.port}"
 
     @property
     def core(self) -> BridgeCore:

@@ -140,12 +140,14 @@ def journeys(spans: Iterable[SpanRecord]) -> list[Journey]:
 def _add_end_to_end(journey: Journey, first: Mapping[str, SpanRecord],
                     group: Sequence[SpanRecord], subscriber: str) -> None:
     generate = first.get("generate")
-    if generate is None:
+    encode = first.get("encode")  # a replay (riverbridge play) has no generate: ready = encode
+    if generate is None and encode is None:
         return
+    ready_ns = generate.end_ns if generate is not None else encode.start_ns
     for stage, name in (("decode", TRANSPORT), ("process", RESULT)):
         end = next((s for s in group if s.stage == stage and s.process == subscriber), None)
         if end is not None:
-            journey.durations_ms[name] = _ms(generate.end_ns, end.end_ns)
+            journey.durations_ms[name] = _ms(ready_ns, end.end_ns)
 
 
 def percentiles(values_ms: Sequence[float]) -> dict[str, float]:

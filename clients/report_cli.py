@@ -9,7 +9,9 @@ together with navigation's outputs and the simulator's ground truth; it asks the
 ``lo`` at the window's start and end. It prints per topic rate, bytes, the mean and
 p50/p90/p99/max per stage beside the thesis's figures, the network overhead the thesis's way,
 and navigation's detection quality (stdout; docs/report.md, docs/quality.md), shows progress on
-stderr, and can write ``--json`` and ``--plots``.
+stderr, and can write ``--json`` and ``--plots``. ``--record FILE`` also records every topic
+into an MCAP file; ``--replay FILE`` measures the bridge and navigation on a recording, with a
+player (clients.recording) in the simulator's place (docs/recording.md).
 
 Exit codes: 0 report written; 1 the stack failed or nothing was measured; 2 bad options.
 """
@@ -35,8 +37,23 @@ import numpy as np
 
 from clients.client import RosbridgeClient
 from clients.errors import RosbridgeError
-from clients.launcher import LaunchConfig, PrefixedOutput, Supervisor, stack_components
+from clients.launcher import (
+    SIMULATOR_TOPICS,
+    LaunchConfig,
+    PrefixedOutput,
+    Supervisor,
+    stack_components,
+)
 from clients.quality import lidar_quality, pair_by_stamp, radar_quality
+from clients.recording.components import (
+    player_component,
+    record_path,
+    recorder_component,
+    recorder_process,
+)
+from clients.recording.play_cli import recording_file
+from clients.recording.reading import recorded_topics
+from clients.recording.record_cli import output_file
 from clients.report import (
     SENSOR_TOPICS,
     SpanRecord,
@@ -285,13 +302,22 @@ async def run_stack(encoding: str, args: argparse.Namespace, progress: Progress,
 
     def on_ready(url: str) -> None:
         progress.message(f"{label}: stack ready at {url}")
-        task = asyncio.create_task(measure(url, encoding, args.duration, args.warmup, progress,
+        name = f"{encoding} replay" if args.replay is not None else encoding
+        task = asyncio.create_task(measure(url, name, args.duration, args.warmup, progress,
                                            profile))
         task.add_done_callback(lambda _: stop.set())
         measuring.append(task)
 
-    progress.message(f"{label}: starting bridge, simulator and navigation")
-    supervisor = Supervisor(stack_components(config), config,
+    components = stack_components(config)
+    if args.replay is not None:  # the recording's sensor topics in the simulator's place
+        bridge, _simulator, navigation = components
+        components = (bridge, player_component(args.replay, args.replay_topics), navigation)
+    if args.record is not None:
+        runs = len(args.encoding) * len(args.profile)
+        components += (recorder_component(record_path(args.record, label.replace("/", "-"),
+                                                      runs)),)
+    progress.message(f"{label}: starting " + ", ".join(c.title for c in components))
+    supervisor = Supervisor(components, config,
                             PrefixedOutput(log_stream, colour=False), on_ready=on_ready)
     status = await supervisor.run(stop)
     if not measuring:
@@ -367,6 +393,12 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--startup-timeout", type=positive_seconds, default=120.0, metavar="S")
     parser.add_argument("--log", type=Path, metavar="FILE",
                         help="where the stack's logs go (default: a file in the temp folder)")
+    parser.add_argument("--record", type=output_file, metavar="FILE.mcap",
+                        help="also record every topic into this MCAP file (one file per "
+                        "encoding, FILE.<encoding>.mcap, when several run)")
+    parser.add_argument("--replay", type=recording_file, metavar="FILE.mcap",
+                        help="measure on a recording: bridge, navigation and a player of the "
+                        "recording's sensor topics (looped), no simulator")
     return parser
 
 
@@ -380,6 +412,16 @@ def check_paths(parser: argparse.ArgumentParser, args: argparse.Namespace) -> No
     if args.sim_config is not None and "default" not in args.profile and _sets_profile(
             args.sim_config):
         parser.error(f"argument --profile: {args.sim_config} sets profile itself; drop one")
+    if args.replay is not None:
+        if args.bridge is not None:
+            parser.error("argument --replay: starts its own stack; leave out --bridge")
+        if tuple(args.profile) != ("default",):
+            parser.error("argument --replay: the recording sets the payload; leave out "
+                         "--profile")
+        args.replay_topics = [t for t in SIMULATOR_TOPICS if t in recorded_topics(args.replay)]
+        if not args.replay_topics:
+            parser.error(f"argument --replay: {args.replay} has none of the simulator's "
+                         f"topics ({', '.join(SIMULATOR_TOPICS)})")
     if args.plots is not None:
         try:
             args.plots.mkdir(parents=True, exist_ok=True)
@@ -400,7 +442,12 @@ def _sets_profile(path: Path) -> bool:
 async def _run_all(args: argparse.Namespace, progress: Progress,
                    log_stream: TextIO) -> list[dict[str, Any]]:
     if args.bridge is not None:
-        return [await measure(args.bridge, "attached", args.duration, args.warmup, progress)]
+        if args.record is None:
+            return [await measure(args.bridge, "attached", args.duration, args.warmup,
+                                  progress)]
+        async with recorder_process(args.bridge, args.record):
+            return [await measure(args.bridge, "attached", args.duration, args.warmup,
+                                  progress)]
     runs = []
     with tempfile.TemporaryDirectory(prefix="riverbridge-report-") as folder:
         for profile in args.profile:
@@ -433,6 +480,10 @@ def main(argv: list[str] | None = None, *, stdout: TextIO | None = None,
 def _emit(runs: list[dict[str, Any]], args: argparse.Namespace, out: TextIO,
           progress: Progress) -> int:
     write: Callable[[str], Any] = out.write
+    if args.replay is not None:
+        write(f"REPLAY of {args.replay}: {', '.join(args.replay_topics)} played from the "
+              "recording (looped, header stamps shifted to capture time on today's clock); "
+              "no simulator ran, so there is no generate stage.\n\n")
     for run in runs:
         write(render_run(run) + "\n\n")
     if len(runs) > 1:
@@ -441,7 +492,8 @@ def _emit(runs: list[dict[str, Any]], args: argparse.Namespace, out: TextIO,
         document = {"runs": json_ready(runs), "sensor_topics": list(SENSOR_TOPICS),
                     # one list over all runs, each row tagged with its run (docs/report.md)
                     "thesis_comparison": [{"run": run_label(run), **row} for run in runs
-                                          for row in json_ready(run["thesis_comparison"])]}
+                                          for row in json_ready(run["thesis_comparison"])],
+                    "replay": str(args.replay) if args.replay is not None else None}
         args.json.write_text(json.dumps(document, indent=1), encoding="utf-8")
         progress.message(f"wrote {args.json}")
     if args.plots is not None:

@@ -22,9 +22,10 @@ from dataclasses import asdict, dataclass
 from types import MappingProxyType
 from typing import Any, Literal
 
-# Who publishes: one of the stack's processes, every process (telemetry; the bridge too), or
-# an operator (the dashboard's keyboard, `riverbridge teleop`, any rosbridge client).
-Producer = Literal["simulator", "navigation", "every process", "operator"]
+# Who publishes: one of the stack's processes, every process (telemetry; the bridge too),
+# `riverbridge up` (the supervisor), or an operator (the dashboard's keyboard, `riverbridge
+# teleop`, any rosbridge client).
+Producer = Literal["simulator", "navigation", "every process", "supervisor", "operator"]
 # What it carries, and so how its producer treats it:
 #   sensor    heavy sensor data: a worker thread of its own, the producer's bulk connection
 #   realtime  small, frequent messages: the producer's realtime connection, never behind a scan
@@ -32,11 +33,12 @@ Producer = Literal["simulator", "navigation", "every process", "operator"]
 #   truth     what the simulator knows, for judging navigation (docs/quality.md)
 #   command   an operator's demand
 #   output    navigation's results
-#   telemetry how the stack is doing: diagnostics, trace spans, process statistics
+#   telemetry how the stack is doing: diagnostics, trace spans, process statistics, restarts
 Role = Literal["sensor", "realtime", "static", "truth", "command", "output", "telemetry"]
 ROLES: tuple[Role, ...] = ("sensor", "realtime", "static", "truth", "command", "output",
                            "telemetry")
-PRODUCERS: tuple[Producer, ...] = ("simulator", "navigation", "every process", "operator")
+PRODUCERS: tuple[Producer, ...] = ("simulator", "navigation", "every process", "supervisor",
+                                   "operator")
 
 
 @dataclass(frozen=True)
@@ -135,6 +137,9 @@ _ENTRIES = (
     Topic("process_stats", "/riverbridge/process_stats", "riverbridge_msgs/msg/ProcessStats",
           "every process", "telemetry", "CPU, memory, messages and drops of one process",
           period_s=1.0, consumers=("dashboard",)),
+    Topic("restarts", "/riverbridge/restarts", "diagnostic_msgs/msg/DiagnosticArray",
+          "supervisor", "telemetry", "how often `up` restarted each component", latched=True,
+          consumers=("dashboard",)),
 )
 
 TOPICS: Mapping[str, Topic] = MappingProxyType({t.key: t for t in _ENTRIES})

@@ -22,7 +22,7 @@ import { ArrivalAges, TraceStats } from "./trace.js";
 // ms) allows. queue_length 1 makes the bridge drop stale messages for a slow page instead of
 // queueing. The LIDAR's 2.9 MB scans are decoded and decimated in a worker (LIDAR).
 const THROTTLE_MS = { radar: 250, camera: 100, imu: 10, odom: 50, tf_static: 0, boxes: 100,
-  radar_detections: 100, lines: 100, obstacle_map: 250, trace: 0, process_stats: 0 };
+  radar_detections: 100, lines: 100, obstacle_map: 250, trace: 0, process_stats: 0, restarts: 0 };
 const LIDAR = { topic: topic("lidar").name, messageType: topic("lidar").type,
   throttleMs: 250, maxPoints: 40000 }; // 40k of a ~180k scan: more adds no visible detail
 const SUBSCRIPTIONS = DASHBOARD_TOPICS.filter((t) => t.name !== LIDAR.topic);
@@ -107,6 +107,7 @@ function messageHandlers(panels, trace, vessel) {
     obstacle_map: (m) => panels.map.onGrid(m),
     trace: (m) => trace.onSpans(m),
     process_stats: (m) => panels.topics.onProcessStats(m),
+    restarts: (m) => panels.topics.onRestarts(m),
   };
 }
 
