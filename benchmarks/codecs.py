@@ -22,6 +22,7 @@ from schemas import codec_cbor, codec_json, frames
 from schemas.codec_cdr import from_cdr, to_cdr
 from schemas.codec_png import decode_png_data, encode_png_op
 from schemas.message import normalize
+from schemas.pointcloud import pack_points
 from schemas.registry import TypeRegistry
 from schemas.safety import frame_problem
 
@@ -37,20 +38,7 @@ TUNED_MALLOC = {
 def pointcloud(num_points: int) -> dict:
     """A raw PointCloud2 dict holding (num_points, 4) float32 points as bytes."""
     points = np.random.default_rng(0).random((num_points, 4), dtype=np.float32)
-    return {
-        "header": {"stamp": {"sec": 1_700_000_000, "nanosec": 0}, "frame_id": "lidar"},
-        "height": 1,
-        "width": num_points,
-        "fields": [
-            {"name": name, "offset": 4 * i, "datatype": 7, "count": 1}
-            for i, name in enumerate(("x", "y", "z", "intensity"))
-        ],
-        "is_bigendian": False,
-        "point_step": POINT_STEP_BYTES,
-        "row_step": POINT_STEP_BYTES * num_points,
-        "data": points.tobytes(),
-        "is_dense": True,
-    }
+    return pack_points(points, 1_700_000_000 * 10**9, "lidar")
 
 
 def measure(step: Callable[[], object], repeats: int) -> tuple[float, float]:

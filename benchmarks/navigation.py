@@ -53,9 +53,9 @@ from navigation.lidar import cluster_obstacles, obstacle_points, process_scan  #
 from navigation.lidar_messages import box_array_msg, marker_array_msg  # noqa: E402
 from navigation.messages import stamp_ns_of  # noqa: E402
 from navigation.node import SENSOR_INPUTS, NavigationNode  # noqa: E402
-from navigation.pointcloud import pointcloud2_msg, xyzi_view  # noqa: E402
 from navigation.processors import OUTPUT_TYPES, TOPIC_BOXES, Processors  # noqa: E402
 from navigation.radar import PolarGeometry, detect, detection_array_msg, radar_power  # noqa: E402
+from schemas.pointcloud import pack_points, view_points  # noqa: E402
 from schemas.process_tuning import single_threaded_blas  # noqa: E402
 
 log = logging.getLogger("benchmarks.navigation")
@@ -106,7 +106,7 @@ def simulator_scan() -> tuple[dict, str]:
     except Exception as exc:  # the benchmark must still say something useful
         log.warning("simulator unavailable (%s); using the synthetic scan instead", exc)
         points, label = synthetic_scan()
-        return pointcloud2_msg(points, STAMP_NS, "lidar"), f"SYNTHETIC fallback: {label}"
+        return pack_points(points, STAMP_NS, "lidar"), f"SYNTHETIC fallback: {label}"
 
 
 def synthetic_scan() -> tuple[np.ndarray, str]:
@@ -120,7 +120,7 @@ def synthetic_scan() -> tuple[np.ndarray, str]:
 
 def lidar_rows(msg: dict, label: str, repeat: int) -> list[Row]:
     config = LidarConfig()
-    points = xyzi_view(msg)
+    points = view_points(msg)
     keep, _ = obstacle_points(points, config)
     xyz = np.ascontiguousarray(points[keep, :3])
     labels, samples = cluster_obstacles(xyz, config)
@@ -133,14 +133,14 @@ def lidar_rows(msg: dict, label: str, repeat: int) -> list[Row]:
     )
     compare_with_plain_dbscan(xyz, labels, config)
     return [
-        row("lidar: PointCloud2 -> view", lambda: xyzi_view(msg), repeat),
+        row("lidar: PointCloud2 -> view", lambda: view_points(msg), repeat),
         row("lidar: crop + water/terrain", lambda: obstacle_points(points, config), repeat),
         row("lidar: voxel + DBSCAN", lambda: cluster_obstacles(xyz, config), repeat, None, 29),
         row("lidar: boxes", lambda: refine_boxes(xyz, labels, 3.0), repeat, 10, 186),
         row("lidar: BoxArray + MarkerArray", lambda: lidar_messages(result), repeat),
         row(
             "lidar: scan -> boxes (total)",
-            lambda: process_scan(xyzi_view(msg), config),
+            lambda: process_scan(view_points(msg), config),
             repeat,
             120,
             29 + 186,
@@ -305,7 +305,7 @@ def camera_rows(repeat: int) -> list[Row]:
 
 
 def fusion_rows(msg: dict, repeat: int) -> list[Row]:
-    result = process_scan(xyzi_view(msg), LidarConfig())
+    result = process_scan(view_points(msg), LidarConfig())
     radar_xy = np.random.default_rng(0).uniform(-150, 150, (500, 2)).astype(np.float32)
     config = FusionConfig()
 
@@ -405,7 +405,7 @@ async def sustained_run(url: str, scans: list[np.ndarray], count: int) -> Sustai
         loop = asyncio.get_running_loop()
         next_s = loop.time()
         for k in range(count):
-            await feeder.publish(lidar_topic, pointcloud2_msg(scans[k % len(scans)],
+            await feeder.publish(lidar_topic, pack_points(scans[k % len(scans)],
                                                               time.time_ns(), "lidar"))
             next_s += SCAN_PERIOD_S
             await asyncio.sleep(max(0.0, next_s - loop.time()))
@@ -462,7 +462,7 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     sim_msg, sim_label = simulator_scan()
     synthetic_points, synthetic_label = synthetic_scan()
-    synthetic_msg = pointcloud2_msg(synthetic_points, STAMP_NS, "lidar")
+    synthetic_msg = pack_points(synthetic_points, STAMP_NS, "lidar")
     rows = lidar_rows(sim_msg, sim_label, args.repeat)
     rows += [
         Row(f"{r.name} [synthetic]", r.median_ms, r.min_ms, r.target_ms, r.thesis_ms)

@@ -46,6 +46,7 @@ from clients.connection import AUTH_SECRET_ENV, TransportConfig
 from clients.errors import RosbridgeError
 from clients.healthcheck import Unhealthy, fetch_version, missing_publishers
 from clients.restarts import RestartBackoff, RestartLedger, RestartMode, RestartPolicy
+from schemas.catalogue import streams_of
 from schemas.rosauth import read_secret
 
 log = logging.getLogger(__name__)
@@ -54,10 +55,9 @@ T = TypeVar("T")
 BRIDGE_URL = "{bridge_url}"
 """Placeholder in a component's arguments, replaced by the bridge's URL once it listens."""
 
-SIMULATOR_TOPICS = ("/lidar/points", "/radar/image", "/camera/image/compressed", "/imu/data",
-                    "/gnss/fix", "/odom", "/tf")
-NAVIGATION_TOPICS = ("/nav/boxes", "/nav/markers", "/nav/radar_detections", "/nav/lines",
-                     "/nav/obstacle_map", "/nav/diagnostics")
+# Ready when these have publishers: what each always streams (schemas.catalogue).
+SIMULATOR_TOPICS = streams_of("simulator")
+NAVIGATION_TOPICS = streams_of("navigation")
 
 # glibc malloc tuning for 4 MB sensor buffers: fresh mmap'd buffers cost ~3 ms of page faults
 # per scan (performance-measurements.md, page-fault note); these keep them on the heap.

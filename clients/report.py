@@ -17,6 +17,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from clients.thesis import FIGURES
+from schemas.catalogue import TOPICS as CATALOGUE
 from schemas.tracing import header_stamp_ns
 
 # Stages in path order: recorded spans plus the two hops between processes.
@@ -26,7 +27,8 @@ TRANSPORT = "transport"  # publisher ready (generate.end) -> subscriber decoded 
 RESULT = "result"  # publisher ready -> processing done (scan -> boxes)
 STEP_PREFIX = "process."
 
-SENSOR_TOPICS = ("/lidar/points", "/radar/image", "/camera/image/compressed", "/imu/data")
+# The thesis's four sensor streams (schemas.catalogue): their payload, their latency.
+SENSOR_TOPICS = tuple(t.name for t in CATALOGUE.values() if t.thesis_sensor)
 
 # The thesis's overhead (tables 4.9/4.10): 1.62 MB/s of network load for 291.27 KB/s of
 # sensor payload. Every other figure, with its statistic and source: clients.thesis.

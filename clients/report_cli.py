@@ -72,6 +72,7 @@ from clients.report_text import render_comparison, render_run, run_label
 from clients.sockets import SS_COMMAND, SocketBytes, parse_ss, window_traffic
 from clients.thesis import thesis_comparison
 from clients.up_cli import positive_seconds
+from schemas.catalogue import TOPICS
 from schemas.tracing import (
     NS_PER_S,
     STATS_SERVICE,
@@ -89,19 +90,14 @@ ENCODINGS = ("json", "cbor")
 # Spans of a message arrive up to ~1 s (batch period) after its last stage; a LIDAR scan's
 # last stage ends ~0.2 s after capture. Wait this long after the window before summarising.
 TAIL_S = 2.5
-SAMPLE_TYPES = {"/lidar/points": "sensor_msgs/msg/PointCloud2",
-                "/radar/image": "riverbridge_msgs/msg/RadarImage",
-                "/camera/image/compressed": "sensor_msgs/msg/CompressedImage",
-                "/imu/data": "sensor_msgs/msg/Imu"}
+SAMPLE_TYPES = {t.name: t.type for t in TOPICS.values() if t.thesis_sensor}
 PROFILES = ("default", "thesis")  # simulator payload profiles (simulator.config.PROFILES)
 STACK_PROCESSES = ("bridge", "simulator", "navigation")
 # What the detection quality reads (docs/quality.md): the truth and navigation's outputs.
-TRUTH_TYPE = "riverbridge_msgs/msg/GroundTruthArray"
-QUALITY_TOPICS = {"lidar_truth": ("/sim/ground_truth/lidar", TRUTH_TYPE),
-                  "radar_truth": ("/sim/ground_truth/radar", TRUTH_TYPE),
-                  "boxes": ("/nav/boxes", "riverbridge_msgs/msg/BoxArray"),
-                  "radar": ("/nav/radar_detections", "riverbridge_msgs/msg/RadarDetectionArray")}
-SIM_CONFIG = ("/sim/config", "std_msgs/msg/String")
+QUALITY_TOPICS = {"lidar_truth": TOPICS["lidar_truth"].pair,
+                  "radar_truth": TOPICS["radar_truth"].pair,
+                  "boxes": TOPICS["boxes"].pair, "radar": TOPICS["radar_detections"].pair}
+SIM_CONFIG = TOPICS["sim_config"].pair
 
 
 # --------------------------------------------------------------------------- progress
@@ -164,11 +160,11 @@ def stack_sockets(before: list[SocketBytes] | None, after: list[SocketBytes] | N
 
 def describe_sample(topic: str, msg: dict[str, Any]) -> str:
     """The payload of one sensor message in words (points per scan, cells, bytes)."""
-    if topic == "/lidar/points":
+    if topic == TOPICS["lidar"].name:
         return f"{int(msg['width']) * int(msg['height']):,} points x {msg['point_step']} B"
-    if topic == "/radar/image":
+    if topic == TOPICS["radar"].name:
         return f"{msg['num_beams']} beams x {msg['num_cells']} cells float32"
-    if topic == "/camera/image/compressed":
+    if topic == TOPICS["camera"].name:
         return f"{msg['format']} {len(msg['data']):,} B"
     return "one sample"
 

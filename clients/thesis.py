@@ -14,8 +14,9 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-LIDAR, RADAR, CAMERA, IMU = ("/lidar/points", "/radar/image", "/camera/image/compressed",
-                             "/imu/data")
+from schemas.catalogue import TOPICS
+
+LIDAR, RADAR, CAMERA, IMU = (TOPICS[key].name for key in ("lidar", "radar", "camera", "imu"))
 PUBLISH_SIDE = ("generate", "publish_wait", "encode", "send")  # the simulator's share
 STATISTICS = ("mean", "p50", "max", "max-p50", "ratio")
 

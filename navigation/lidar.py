@@ -2,10 +2,13 @@
 
 The pure pipeline of thesis 3.5.3 (DBSCAN, then the bounding-box refinement), preceded by
 the reductions that make DBSCAN affordable on a full 345,600-ray scan (lidar_filter).
+`process_scan` is the one pipeline: the node runs it through a `LidarWorker`
+(navigation.lidar_worker), tests and benchmarks call it directly.
 """
 
 from __future__ import annotations
 
+import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -18,24 +21,48 @@ from navigation.lidar_filter import obstacle_mask, range_mask, voxel_downsample
 NOISE = -1  # DBSCAN noise, and every point removed before clustering
 
 
+# Sub-step name -> (start_ns, end_ns) wall clock, for stage tracing (docs/tracing.md)
+StepTimes = dict[str, tuple[int, int]]
+
+
 @dataclass(frozen=True)
 class LidarResult:
-    """Outcome of one scan.
+    """Outcome of one scan: small enough to come back from a worker process (no per-point
+    arrays; `labels` and `obstacle` expand the obstacle points' labels on demand).
 
-    labels : (n,) int32, cluster of every input point; -1 for noise and removed points.
-    obstacle : (n,) bool, points that survived the range crop and water/terrain removal.
-    boxes : refined boxes of all clusters.
+    boxes : refined boxes of all clusters, sensor frame.
     num_clusters : clusters found.
+    obstacle_index : (k,) int64, the input points that survived the range crop and the
+        water/terrain removal; obstacle_labels : (k,) int32, their clusters (-1 noise).
+    num_points : n, the input points.
     num_clustered_samples : points (or voxels) handed to the clustering.
     water_level_z_m : water height used, None when none was found.
+    steps : wall-clock spans of ``filter``, ``dbscan`` and ``boxes`` (the thesis's 29 ms and
+        186 ms, table A.1), traced as ``process.<step>``.
     """
 
-    labels: np.ndarray
-    obstacle: np.ndarray
     boxes: Boxes
     num_clusters: int
+    obstacle_index: np.ndarray
+    obstacle_labels: np.ndarray
+    num_points: int
     num_clustered_samples: int
     water_level_z_m: float | None
+    steps: StepTimes
+
+    @property
+    def labels(self) -> np.ndarray:
+        """(n,) int32, the cluster of every input point; -1 for noise and removed points."""
+        labels = np.full(self.num_points, NOISE, dtype=np.int32)
+        labels[self.obstacle_index] = self.obstacle_labels
+        return labels
+
+    @property
+    def obstacle(self) -> np.ndarray:
+        """(n,) bool, the points that survived the crop and the water/terrain removal."""
+        keep = np.zeros(self.num_points, dtype=bool)
+        keep[self.obstacle_index] = True
+        return keep
 
 
 def obstacle_points(points: np.ndarray, config: LidarConfig) -> tuple[np.ndarray, float | None]:
@@ -60,13 +87,17 @@ def cluster_obstacles(xyz: np.ndarray, config: LidarConfig) -> tuple[np.ndarray,
 
 
 def process_scan(points: np.ndarray, config: LidarConfig) -> LidarResult:
-    """The whole LIDAR step. points : (n, >=3) float32, sensor frame, metres."""
+    """The whole LIDAR step, each sub-step timed: crop and water/terrain removal, voxels and
+    clustering, boxes. points : (n, >=3) float32, sensor frame, metres, any strides."""
+    t0 = time.time_ns()
     keep, water_z = obstacle_points(points, config)
     index = np.flatnonzero(keep)
     xyz = np.ascontiguousarray(points[index, :3])
-    obstacle_labels, samples = cluster_obstacles(xyz, config)
-    labels = np.full(points.shape[0], NOISE, dtype=np.int32)
-    labels[index] = obstacle_labels
-    boxes = refine_boxes(xyz, obstacle_labels, config.box_max_size_m, config.shrink_boxes)
-    num_clusters = int(np.unique(obstacle_labels[obstacle_labels >= 0]).size)
-    return LidarResult(labels, keep, boxes, num_clusters, samples, water_z)
+    t1 = time.time_ns()
+    labels, samples = cluster_obstacles(xyz, config)
+    t2 = time.time_ns()
+    boxes = refine_boxes(xyz, labels, config.box_max_size_m, config.shrink_boxes)
+    t3 = time.time_ns()
+    num_clusters = int(np.unique(labels[labels >= 0]).size)
+    return LidarResult(boxes, num_clusters, index, labels, int(points.shape[0]), samples,
+                       water_z, {"filter": (t0, t1), "dbscan": (t1, t2), "boxes": (t2, t3)})

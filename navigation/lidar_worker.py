@@ -5,8 +5,8 @@ scan (~30 ms of work at 2 Hz); on a thread of the navigation process every such 
 time the event loop that reads the IMU cannot run (DESIGN §4: work that holds the GIL goes to
 another process). ``ProcessLidarWorker`` keeps one warm worker process and hands it the points
 through a reused shared-memory buffer, so the navigation process pays only a GIL-free copy
-(~1 ms for a 2.9 MB scan); the small boxes and the step timings come back pickled. The hop
-costs ~5 ms of LIDAR latency (scan -> boxes) on a 2-core machine.
+(~1 ms for a 2.9 MB scan); the small result (boxes, obstacle labels, step timings) comes back
+pickled. The hop costs ~5 ms of LIDAR latency (scan -> boxes) on a 2-core machine.
 """
 
 from __future__ import annotations
@@ -21,61 +21,25 @@ import time
 from collections.abc import Callable
 from concurrent.futures import ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
-from dataclasses import dataclass
 from multiprocessing.shared_memory import SharedMemory
 from typing import Protocol
 
 import numpy as np
 
-from navigation.boxes import Boxes, refine_boxes
 from navigation.config import LidarConfig
-from navigation.lidar import cluster_obstacles, obstacle_points
+from navigation.lidar import LidarResult, process_scan
 from schemas.process_tuning import background_priority, tune_process
 
 log = logging.getLogger(__name__)
 
-# Sub-step name -> (start_ns, end_ns) wall clock, for stage tracing (docs/tracing.md)
-StepTimes = dict[str, tuple[int, int]]
 POINT_BYTES = 12  # (x, y, z) float32: the LIDAR step uses no intensity
 PARENT_POLL_S = 1.0  # where pidfd is missing: how soon an orphaned worker notices
 START_TIMEOUT_S = 120.0  # importing numpy + scikit-learn on a loaded 2-core machine
 
 
-@dataclass(frozen=True)
-class ScanBoxes:
-    """What the node publishes from one scan.
-
-    boxes : refined boxes of all clusters, sensor frame.
-    num_clusters : clusters found.
-    steps : wall-clock spans of ``filter``, ``dbscan`` and ``boxes``.
-    """
-
-    boxes: Boxes
-    num_clusters: int
-    steps: StepTimes
-
-
-# The LIDAR step: points (n, 4) float32 -> ScanBoxes. For a process worker it must pickle
+# The LIDAR step: points (n, 3) float32 -> LidarResult. For a process worker it must pickle
 # (a module-level function or an instance of a module-level class).
-ScanStep = Callable[[np.ndarray, LidarConfig], ScanBoxes]
-
-
-def scan_boxes(points: np.ndarray, config: LidarConfig) -> ScanBoxes:
-    """Crop, water/terrain removal, voxels, clustering and boxes, each step timed.
-
-    points : (n, >=3) float32, sensor frame, metres.
-    """
-    t0 = time.time_ns()
-    keep, _ = obstacle_points(points, config)
-    xyz = np.ascontiguousarray(points[np.flatnonzero(keep), :3])
-    t1 = time.time_ns()
-    labels, _ = cluster_obstacles(xyz, config)
-    t2 = time.time_ns()
-    boxes = refine_boxes(xyz, labels, config.box_max_size_m, config.shrink_boxes)
-    t3 = time.time_ns()
-    num_clusters = int(np.unique(labels[labels >= 0]).size)
-    return ScanBoxes(boxes, num_clusters, {"filter": (t0, t1), "dbscan": (t1, t2),
-                                           "boxes": (t2, t3)})
+ScanStep = Callable[[np.ndarray, LidarConfig], LidarResult]
 
 
 def warm_up_points() -> np.ndarray:
@@ -94,7 +58,7 @@ class LidarWorker(Protocol):
 
     def start(self) -> None: ...
 
-    def __call__(self, points: np.ndarray) -> ScanBoxes: ...
+    def __call__(self, points: np.ndarray) -> LidarResult: ...
 
     def close(self) -> None: ...
 
@@ -102,13 +66,13 @@ class LidarWorker(Protocol):
 class ThreadLidarWorker:
     """The LIDAR step in the calling thread (``[lidar] worker = "thread"``)."""
 
-    def __init__(self, config: LidarConfig, step: ScanStep = scan_boxes) -> None:
+    def __init__(self, config: LidarConfig, step: ScanStep = process_scan) -> None:
         self._config, self._step = config, step
 
     def start(self) -> None:
         """Nothing to start; the first scan pays scikit-learn's imports."""
 
-    def __call__(self, points: np.ndarray) -> ScanBoxes:
+    def __call__(self, points: np.ndarray) -> LidarResult:
         return self._step(points, self._config)
 
     def close(self) -> None:
@@ -123,7 +87,7 @@ class ProcessLidarWorker:
     start from a clean interpreter: no copied locks, threads or sockets of the event loop.
     """
 
-    def __init__(self, config: LidarConfig, step: ScanStep = scan_boxes) -> None:
+    def __init__(self, config: LidarConfig, step: ScanStep = process_scan) -> None:
         self._config, self._step = config, step
         self._lock = threading.Lock()
         self._pool: ProcessPoolExecutor | None = None
@@ -136,7 +100,7 @@ class ProcessLidarWorker:
         with self._lock:
             self._ensure_started()
 
-    def __call__(self, points: np.ndarray) -> ScanBoxes:
+    def __call__(self, points: np.ndarray) -> LidarResult:
         """points : (n, >=3) float32, any strides (a view of the message's bytes)."""
         with self._lock:
             pool = self._ensure_started()
@@ -248,11 +212,11 @@ def _alive(pid: int) -> bool:
 
 def _warm_up(config: LidarConfig) -> int:
     """In the worker: one small scan through every step; returns the worker's pid."""
-    scan_boxes(warm_up_points(), config)
+    process_scan(warm_up_points(), config)
     return os.getpid()
 
 
-def _run_shared(step: ScanStep, name: str, count: int, config: LidarConfig) -> ScanBoxes:
+def _run_shared(step: ScanStep, name: str, count: int, config: LidarConfig) -> LidarResult:
     """In the worker: copy the points out of the shared buffer, then run ``step``.
 
     The private copy (~1 ms, on the worker's own GIL) lets the buffer be detached at once,

@@ -29,23 +29,22 @@ from navigation.imu import ImuTracker
 from navigation.processors import (
     OUTPUT_TYPES,
     TOPIC_DIAGNOSTICS,
-    Outputs,
+    Handled,
     Processors,
 )
+from schemas.catalogue import TOPICS, consumed_by, period_s
 from schemas.process_tuning import background_priority
 from schemas.tracing import header_stamp_ns
 
 log = logging.getLogger(__name__)
 
 
-SENSOR_INPUTS = {
-    "lidar": ("/lidar/points", "sensor_msgs/msg/PointCloud2"),
-    "radar": ("/radar/image", "riverbridge_msgs/msg/RadarImage"),
-    "camera": ("/camera/image/compressed", "sensor_msgs/msg/CompressedImage"),
-}
-IMU_INPUT = ("/imu/data", "sensor_msgs/msg/Imu")
+# What navigation reads (schemas.catalogue): the heavy sensors, each on a thread of its own,
+# and the IMU on the event loop.
+SENSOR_INPUTS = {t.key: t.pair for t in consumed_by("navigation", "sensor")}
+IMU_INPUT = TOPICS["imu"].pair
 IMU_QUEUE = 1000  # IMU messages are tiny and every one counts for the gap statistics
-DIAGNOSTICS_PERIOD_S = 1.0
+DIAGNOSTICS_PERIOD_S = period_s("diagnostics")
 
 
 class NavigationNode:
@@ -77,11 +76,11 @@ class NavigationNode:
             )
             for name in SENSOR_INPUTS
         }
-        self._handlers: dict[str, Callable[[dict[str, Any]], Outputs]] = {
-            "lidar": self.processors.lidar,
-            "radar": self.processors.radar,
-            "camera": self.processors.camera,
-        }
+        self._handlers: dict[str, Callable[[dict[str, Any]], Handled]] = (
+            self.processors.handlers())
+        unhandled = SENSOR_INPUTS.keys() - self._handlers.keys()
+        if unhandled:
+            raise ValueError(f"no navigation handler for input topics {sorted(unhandled)}")
 
     async def run(self, stop: asyncio.Event) -> None:
         """Advertise, subscribe, process until ``stop`` is set, then release the threads and
@@ -135,7 +134,7 @@ class NavigationNode:
             start = time.perf_counter()
             start_ns = time.time_ns()
             try:
-                outputs = await loop.run_in_executor(
+                handled = await loop.run_in_executor(
                     self._executors[name], self._handlers[name], received.msg
                 )
             except Exception:  # one bad message must not end the sensor's loop
@@ -144,10 +143,9 @@ class NavigationNode:
                 continue
             counters.record((time.perf_counter() - start) * 1e3)
             if self._tracer is not None:
-                steps = self.processors.lidar_steps if name == "lidar" else None
                 self._tracer.processed(sub.topic, header_stamp_ns(received.msg), start_ns,
-                                       time.time_ns(), received.recv_ns, steps)
-            for topic, msg in outputs:
+                                       time.time_ns(), received.recv_ns, handled.steps)
+            for topic, msg in handled.outputs:
                 await self._client.publish(topic, msg)
 
     async def _imu_loop(self) -> None:

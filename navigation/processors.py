@@ -1,4 +1,4 @@
-"""Per-sensor handlers: one input message in, output messages out (no I/O, no clock).
+"""Per-sensor handlers: one input message in, output messages out (no I/O).
 
 The edge (``navigation.node``) runs each handler on its sensor's worker thread and publishes
 what it returns; keeping them here makes the whole message path testable without a bridge.
@@ -9,6 +9,7 @@ The LIDAR handler hands the points to a ``LidarWorker`` (by default a worker pro
 from __future__ import annotations
 
 import threading
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -19,29 +20,33 @@ from navigation.camera import extract_lines, line_array_msg
 from navigation.cfar import CfarDetector
 from navigation.config import NavigationConfig
 from navigation.fusion import obstacle_grid, occupancy_grid_msg
+from navigation.lidar import StepTimes
 from navigation.lidar_messages import box_array_msg, marker_array_msg
-from navigation.lidar_worker import LidarWorker, StepTimes, lidar_worker_for
+from navigation.lidar_worker import LidarWorker, lidar_worker_for
 from navigation.messages import stamp_ns_of
-from navigation.pointcloud import xyz_view
 from navigation.radar import PolarGeometry, detect, detection_array_msg, radar_power
+from schemas.catalogue import TOPICS, published_by
+from schemas.pointcloud import XYZ, view_points
 
-TOPIC_BOXES = "/nav/boxes"
-TOPIC_MARKERS = "/nav/markers"
-TOPIC_RADAR = "/nav/radar_detections"
-TOPIC_LINES = "/nav/lines"
-TOPIC_MAP = "/nav/obstacle_map"
-TOPIC_DIAGNOSTICS = "/nav/diagnostics"
-
-OUTPUT_TYPES = {
-    TOPIC_BOXES: "riverbridge_msgs/msg/BoxArray",
-    TOPIC_MARKERS: "visualization_msgs/msg/MarkerArray",
-    TOPIC_RADAR: "riverbridge_msgs/msg/RadarDetectionArray",
-    TOPIC_LINES: "riverbridge_msgs/msg/ImageLineArray",
-    TOPIC_MAP: "nav_msgs/msg/OccupancyGrid",
-    TOPIC_DIAGNOSTICS: "diagnostic_msgs/msg/DiagnosticArray",
-}
+TOPIC_BOXES = TOPICS["boxes"].name
+TOPIC_MARKERS = TOPICS["markers"].name
+TOPIC_RADAR = TOPICS["radar_detections"].name
+TOPIC_LINES = TOPICS["lines"].name
+TOPIC_MAP = TOPICS["obstacle_map"].name
+TOPIC_DIAGNOSTICS = TOPICS["diagnostics"].name
+# Everything navigation publishes (schemas.catalogue), advertised at start.
+OUTPUT_TYPES = {t.name: t.type for t in published_by("navigation")}
 
 Outputs = list[tuple[str, dict[str, Any]]]
+
+
+@dataclass(frozen=True)
+class Handled:
+    """What a handler made of one message: the outputs to publish, and the wall-clock spans
+    of its steps (traced as ``process.<step>``; empty for a handler that times none)."""
+
+    outputs: Outputs
+    steps: StepTimes = field(default_factory=dict)
 
 
 @dataclass
@@ -80,7 +85,6 @@ class Processors:
         self.latest = LatestObstacles()
         self._detector = CfarDetector.from_config(config.cfar)
         self._fitting_shapes: set[tuple[int, int]] = set()  # image shapes the window fits
-        self.lidar_steps: StepTimes = {}  # sub-step spans of the last scan (see `lidar`)
         self.lidar_worker = lidar_worker or lidar_worker_for(config.lidar)
 
     def start(self) -> None:
@@ -91,22 +95,25 @@ class Processors:
         """Stop the LIDAR worker; waits for a scan in progress."""
         self.lidar_worker.close()
 
-    def lidar(self, msg: dict[str, Any]) -> Outputs:
-        """PointCloud2 -> BoxArray and MarkerArray (thesis 3.5.3). Leaves the wall-clock
-        spans of ``filter``, ``dbscan`` and ``boxes`` (the thesis's 29 ms and 186 ms) in
-        ``lidar_steps`` for stage tracing (one LIDAR thread, so read it after the call)."""
+    def handlers(self) -> dict[str, Callable[[dict[str, Any]], Handled]]:
+        """The handler of each input topic, by catalogue key (the node runs each on a thread
+        of its own)."""
+        return {"lidar": self.lidar, "radar": self.radar, "camera": self.camera}
+
+    def lidar(self, msg: dict[str, Any]) -> Handled:
+        """PointCloud2 -> BoxArray and MarkerArray (thesis 3.5.3), with the spans of the
+        pipeline's ``filter``, ``dbscan`` and ``boxes`` (the thesis's 29 ms and 186 ms)."""
         stamp_ns, frame_id = stamp_ns_of(msg["header"]), msg["header"]["frame_id"]
-        result = self.lidar_worker(xyz_view(msg))
-        self.lidar_steps = result.steps
+        result = self.lidar_worker(view_points(msg, XYZ))
         self.latest.set_boxes(result.boxes, stamp_ns)
         method = self.config.lidar.method
         boxes = box_array_msg(result.boxes, stamp_ns, frame_id, method, result.num_clusters)
-        return [
+        return Handled([
             (TOPIC_BOXES, boxes),
             (TOPIC_MARKERS, marker_array_msg(result.boxes, stamp_ns, frame_id)),
-        ]
+        ], result.steps)
 
-    def radar(self, msg: dict[str, Any]) -> Outputs:
+    def radar(self, msg: dict[str, Any]) -> Handled:
         """RadarImage -> RadarDetectionArray (thesis 3.5.3, SOCA-CFAR by default): detected
         cells grouped into targets. The obstacle map takes the targets' cells (so a long
         target such as a bank keeps its extent). Raises ``CfarWindowError`` (naming the
@@ -122,15 +129,16 @@ class Processors:
         self.latest.set_radar(np.column_stack([found.x_m[in_target], found.y_m[in_target]]),
                               stamp_ns)
         frame_id = msg["header"]["frame_id"]
-        return [(TOPIC_RADAR, detection_array_msg(found, targets, stamp_ns, frame_id, detector))]
+        return Handled([(TOPIC_RADAR,
+                         detection_array_msg(found, targets, stamp_ns, frame_id, detector))])
 
-    def camera(self, msg: dict[str, Any]) -> Outputs:
+    def camera(self, msg: dict[str, Any]) -> Handled:
         """CompressedImage -> ImageLineArray (thesis table 4.6)."""
         config = self.config.camera
         lines, width, height = extract_lines(msg["data"], config)
         stamp_ns, frame_id = stamp_ns_of(msg["header"]), msg["header"]["frame_id"]
         out = line_array_msg(lines, width, height, stamp_ns, frame_id, config.probabilistic)
-        return [(TOPIC_LINES, out)]
+        return Handled([(TOPIC_LINES, out)])
 
     def obstacle_map(self) -> Outputs:
         """The fused OccupancyGrid of the latest obstacles (thesis figure 21 as data)."""

@@ -12,8 +12,9 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
-RESTARTS_TOPIC = "/riverbridge/restarts"
-RESTARTS_TYPE = "diagnostic_msgs/msg/DiagnosticArray"
+from schemas.catalogue import TOPICS
+
+RESTARTS_TOPIC, RESTARTS_TYPE = TOPICS["restarts"].pair
 NAME_PREFIX = "up/"
 OK, WARN = 0, 1  # diagnostic_msgs/DiagnosticStatus levels
 

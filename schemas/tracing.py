@@ -15,23 +15,20 @@ from collections import deque
 from collections.abc import AsyncIterator
 from typing import TYPE_CHECKING, Any
 
+from schemas.catalogue import TOPICS, period_s
 from schemas.codec_cdr import _to_object
 
 if TYPE_CHECKING:
     from schemas.registry import TypeRegistry
 
-TRACE_TOPIC = "/riverbridge/trace"
-TRACE_TYPE = "riverbridge_msgs/msg/TraceSpanArray"
-STATS_TOPIC = "/riverbridge/process_stats"
-STATS_TYPE = "riverbridge_msgs/msg/ProcessStats"
+TRACE_TOPIC, TRACE_TYPE = TOPICS["trace"].pair
+STATS_TOPIC, STATS_TYPE = TOPICS["process_stats"].pair
 STATS_SERVICE = "/riverbridge/stats"
 STATS_SERVICE_TYPE = "riverbridge_msgs/srv/BridgeStats"
 TELEMETRY_PREFIX = "/riverbridge/"  # messages on these topics are never traced themselves
-PUBLISH_PERIOD_S = 1.0  # ProcessStats go out about once a second (docs/tracing.md)
-# Span batches go out four times a second: building and encoding a second's worth of spans at
-# once (450 nested messages in the simulator) held an event loop for 3-5 ms on a busy core,
-# long enough to delay the IMU sample that came meanwhile; a quarter of it hides in the noise.
-TRACE_PERIOD_S = 0.25
+# ProcessStats about once a second, span batches four times a second (why: schemas.catalogue)
+PUBLISH_PERIOD_S = period_s("process_stats")
+TRACE_PERIOD_S = period_s("trace")
 
 # Spans kept while nobody drains them: ~20 s of the whole stack's traffic (~500 spans/s);
 # past it the oldest are discarded and counted, so memory stays bounded.

@@ -13,11 +13,13 @@ from functools import partial
 import cv2
 import numpy as np
 
-from simulator.config import CameraConfig
+from schemas.catalogue import TOPICS
+from simulator.config import CameraConfig, SimConfig
 from simulator.frames import Pose2D, mount_rotation, rotate_rows, sensor_pose_in_map
 from simulator.messages import compressed_image
 from simulator.raycast import RayCaster, fill_origins
 from simulator.scene import Scene
+from simulator.sensor import Capture, Generated, Schedule, SensorFrame
 
 # Optical frame (x right, y down, z forward) -> camera body frame (x forward, y left, z up).
 OPTICAL_TO_BODY = np.array([[0.0, 0.0, 1.0], [-1.0, 0.0, 0.0], [0.0, -1.0, 0.0]])
@@ -120,3 +122,23 @@ class Camera:
     def message(self, jpeg: bytes, stamp_ns: int) -> dict:
         """sensor_msgs/msg/CompressedImage of one frame, stamped with its capture time."""
         return compressed_image(jpeg, stamp_ns, self.cfg.frame_id)
+
+
+class CameraSensor:
+    """The simulator's camera (simulator.sensor): a rendered JPEG frame per tick on its
+    worker thread, in the optical frame."""
+
+    topic = TOPICS["camera"]
+    schedule: Schedule = "worker"
+
+    def __init__(self, cfg: SimConfig, scene: Scene) -> None:
+        self._scene = scene
+        self.camera = Camera(cfg.camera, threads=2)
+        self.frame = SensorFrame(cfg.camera.frame_id, cfg.camera.mount, OPTICAL_TO_BODY)
+
+    def generate(self, capture: Capture) -> Generated:
+        image = self.camera.render(self._scene, capture.pose)
+        return Generated(self.camera.message(self.camera.encode(image), capture.stamp_ns))
+
+    def close(self) -> None:
+        self.camera.close()

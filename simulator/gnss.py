@@ -10,9 +10,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from simulator.config import GnssConfig
+from schemas.catalogue import TOPICS
+from simulator.config import GnssConfig, SimConfig
 from simulator.frames import Pose2D, sensor_pose_in_map
 from simulator.messages import diagonal_covariance, header
+from simulator.scene import Scene
+from simulator.sensor import Capture, Generated, Schedule, SensorFrame
 from simulator.utm import utm_to_latlon
 
 NAVSAT_STATUS_FIX = 0  # sensor_msgs/msg/NavSatStatus.STATUS_FIX
@@ -49,3 +52,22 @@ class Gnss:
             "position_covariance": diagonal_covariance([horizontal, horizontal, vertical]),
             "position_covariance_type": COVARIANCE_TYPE_DIAGONAL_KNOWN,
         }
+
+
+class GnssSensor:
+    """The simulator's GNSS receiver (simulator.sensor): a fix per tick, on the event loop."""
+
+    topic = TOPICS["gnss"]
+    schedule: Schedule = "timer"
+
+    def __init__(self, cfg: SimConfig, scene: Scene) -> None:
+        self._water_level_m = scene.water_level_m
+        self.gnss = Gnss(cfg.gnss, seed=cfg.seed + 4)
+        self.frame = SensorFrame(cfg.gnss.frame_id, cfg.gnss.mount)
+
+    def generate(self, capture: Capture) -> Generated:
+        fix = self.gnss.fix(capture.pose, self._water_level_m)
+        return Generated(self.gnss.message(fix, capture.stamp_ns))
+
+    def close(self) -> None:
+        """Nothing to release."""

@@ -12,10 +12,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from simulator.config import ImuConfig
+from schemas.catalogue import TOPICS
+from simulator.config import ImuConfig, SimConfig
 from simulator.dynamics import StepResult
 from simulator.frames import mount_rotation, quaternion_from_matrix, rotation_z
 from simulator.messages import diagonal_covariance, header, quaternion, vector3
+from simulator.scene import Scene
+from simulator.sensor import Capture, Generated, Schedule, SensorFrame
 
 
 @dataclass(frozen=True)
@@ -67,3 +70,20 @@ class Imu:
             "linear_acceleration_covariance": diagonal_covariance(
                 [cfg.accel_noise_std_mps2**2] * 3),
         }
+
+
+class ImuSensor:
+    """The simulator's IMU (simulator.sensor): a reading of every physics step."""
+
+    topic = TOPICS["imu"]
+    schedule: Schedule = "physics"
+
+    def __init__(self, cfg: SimConfig, scene: Scene) -> None:
+        self.imu = Imu(cfg.imu, seed=cfg.seed + 3)
+        self.frame = SensorFrame(cfg.imu.frame_id, cfg.imu.mount)
+
+    def generate(self, capture: Capture) -> Generated:
+        return Generated(self.imu.message(self.imu.measure(capture.step), capture.stamp_ns))
+
+    def close(self) -> None:
+        """Nothing to release."""

@@ -14,12 +14,15 @@ from typing import NamedTuple
 
 import numpy as np
 
-from simulator.config import LidarConfig
+from schemas.catalogue import TOPICS
+from schemas.pointcloud import LAYOUTS, pack_points
+from simulator.config import LidarConfig, SimConfig
 from simulator.frames import Pose2D, rotate_rows, sensor_pose_in_map
-from simulator.messages import point_cloud2
 from simulator.objects import WATER
 from simulator.raycast import RayCaster, fill_origins
 from simulator.scene import Scene
+from simulator.sensor import Capture, Generated, Schedule, SensorFrame
+from simulator.truth import lidar_truth
 
 
 class LidarScan(NamedTuple):
@@ -138,4 +141,29 @@ class Lidar:
     def message(self, points: np.ndarray, stamp_ns: int) -> dict:
         """sensor_msgs/msg/PointCloud2 of a scan (`point_fields`), stamped with its capture
         time."""
-        return point_cloud2(points, stamp_ns, self.cfg.frame_id, self.cfg.point_fields)
+        return pack_points(points, stamp_ns, self.cfg.frame_id, LAYOUTS[self.cfg.point_fields])
+
+
+class LidarSensor:
+    """The simulator's LIDAR (simulator.sensor): a scan per tick on its worker thread, and
+    with ``[ground_truth] enabled`` what the scan saw."""
+
+    topic = TOPICS["lidar"]
+    schedule: Schedule = "worker"
+
+    def __init__(self, cfg: SimConfig, scene: Scene) -> None:
+        self._cfg, self._scene = cfg, scene
+        self.lidar = Lidar(cfg.lidar, threads=2, seed=cfg.seed + 1)
+        self.frame = SensorFrame(cfg.lidar.frame_id, cfg.lidar.mount)
+
+    def generate(self, capture: Capture) -> Generated:
+        pose, stamp_ns = capture.pose, capture.stamp_ns
+        if not self._cfg.ground_truth.enabled:
+            return Generated(self.lidar.message(self.lidar.scan(self._scene, pose), stamp_ns))
+        scan = self.lidar.scan_with_sources(self._scene, pose)
+        truth = lidar_truth(self._scene, self._cfg.lidar, pose, scan.source, stamp_ns)
+        return Generated(self.lidar.message(scan.points, stamp_ns),
+                         ((TOPICS["lidar_truth"].name, truth),))
+
+    def close(self) -> None:
+        self.lidar.close()

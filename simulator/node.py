@@ -1,15 +1,17 @@
-"""The simulator's edge: the numeric core on fixed schedules, published through rosbridge.
+"""The simulator's edge: its sensors on fixed schedules, published through rosbridge.
 
 Physics runs at `vessel.physics_rate_hz` on the event loop (one RK4 step is ~0.1 ms) and keeps
-real time by stepping as often as the wall clock demands; every step publishes the IMU, ground
-truth odometry and the vessel transform. Each heavy sensor (LIDAR, radar, camera) has its own
-schedule and its own worker thread (plus its ray-casting threads; Embree, numpy and OpenCV
-release the GIL), so the IMU never waits behind a scan. A sensor that overruns its period skips
-the missed ticks instead of queueing them. All sensor topics are advertised `latest_only`, so a
-publish never blocks the schedule. The small, frequent messages travel on a connection of their
-own, so they never queue on the wire behind a scan. Per-sensor generation times are logged
-periodically. With `[ground_truth] enabled`, the scene's objects go out once (latched) and
-every LIDAR scan and radar sweep is followed by what it saw (simulator.truth).
+real time by stepping as often as the wall clock demands. The node loops over its sensors
+(simulator.sensors; what a sensor is: simulator.sensor) and runs each on its schedule: the
+physics sensors (IMU, odometry, tf) after every step; a timer sensor (GNSS) on the event loop
+at its rate; each worker sensor (LIDAR, radar, camera) on its own schedule and worker thread
+(plus its ray-casting threads; Embree, numpy and OpenCV release the GIL), so the IMU never
+waits behind a scan. A sensor that overruns its period skips the missed ticks instead of
+queueing them. Topics come from schemas.catalogue; every sensor topic is advertised
+`latest_only`, so a publish never blocks the schedule. Realtime topics travel on a connection
+of their own, so they never queue on the wire behind a scan. Per-sensor generation times are
+logged periodically. With `[ground_truth] enabled`, the scene's objects go out once (latched)
+and every LIDAR scan and radar sweep is followed by what it saw (simulator.truth).
 """
 
 from __future__ import annotations
@@ -20,54 +22,31 @@ import logging
 import statistics
 import time
 from collections import deque
-from collections.abc import Awaitable, Callable
+from collections.abc import Awaitable, Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from typing import Any
 
-from clients import RosbridgeClient
+from clients import RosbridgeClient, Subscription
 from clients.node_links import node_links
 from clients.protocol import Encoding
 from clients.tracing import Tracer
+from schemas.catalogue import TOPICS, Topic, published_by
 from schemas.process_tuning import background_priority
-from simulator.camera import OPTICAL_TO_BODY, Camera
-from simulator.config import MountConfig, SimConfig
+from simulator.config import SimConfig
 from simulator.dynamics import Command, StepResult, VesselDynamics, VesselState
-from simulator.frames import mount_rotation, quaternion_from_matrix
-from simulator.gnss import Gnss
-from simulator.imu import Imu
-from simulator.lidar import Lidar
-from simulator.messages import BASE_FRAME, odometry, tf_message, transform_stamped, vessel_tf
-from simulator.radar import Radar
 from simulator.scene import Scene, build_scene
-from simulator.truth import MARKERS_TYPE, TRUTH_TYPE, lidar_truth, markers_msg, radar_truth
+from simulator.sensor import Capture, Generated, Sensor, config_value
+from simulator.sensors import build_sensors, static_transforms
+from simulator.truth import markers_msg
 
 log = logging.getLogger(__name__)
 
-
-TOPICS = {
-    "lidar": ("/lidar/points", "sensor_msgs/msg/PointCloud2"),
-    "radar": ("/radar/image", "riverbridge_msgs/msg/RadarImage"),
-    "camera": ("/camera/image/compressed", "sensor_msgs/msg/CompressedImage"),
-    "imu": ("/imu/data", "sensor_msgs/msg/Imu"),
-    "gnss": ("/gnss/fix", "sensor_msgs/msg/NavSatFix"),
-    "odom": ("/odom", "nav_msgs/msg/Odometry"),
-    "tf": ("/tf", "tf2_msgs/msg/TFMessage"),
-}
-TF_STATIC = ("/tf_static", "tf2_msgs/msg/TFMessage")
-GROUND_TRUTH = ("/sim/ground_truth", MARKERS_TYPE)
-# The effective configuration as JSON (latched), so a recording or a report knows what ran.
-SIM_CONFIG = ("/sim/config", "std_msgs/msg/String")
-TRUTH_TOPICS = {"lidar": "/sim/ground_truth/lidar", "radar": "/sim/ground_truth/radar"}
-COMMAND = ("/cmd_wrench", "geometry_msgs/msg/Wrench")
-HEAVY_SENSORS = ("lidar", "radar", "camera")
 STATS_PERIOD_S = 10.0
 MAX_CATCH_UP_STEPS = 25  # after a long stall, jump ahead rather than spin through the backlog
 # The truth of a scan goes out this long after the scan: not while the bridge is still handing
 # the scan on (its loop would decode and fan out the truth in the scan's way); it is stamped
 # with the scan's capture time, so a judge pairs it all the same.
 TRUTH_DELAY_S = 0.1
-# A sensor tick's work: its message first, then (topic, message) pairs of ground truth.
-Outputs = list[Any]
 
 
 class GenerationTimes:
@@ -89,39 +68,24 @@ class GenerationTimes:
                 f"max={max(self.times_ms):.1f} ms skipped={self.skipped}")
 
 
-def static_transforms(cfg: SimConfig, stamp_ns: int) -> dict:
-    """TFMessage base_link -> every sensor frame, from the mounts (camera: optical frame)."""
-    sensors: list[tuple[str, MountConfig, Any]] = [
-        (cfg.lidar.frame_id, cfg.lidar.mount, None),
-        (cfg.radar.frame_id, cfg.radar.mount, None),
-        (cfg.camera.frame_id, cfg.camera.mount, OPTICAL_TO_BODY),
-        (cfg.imu.frame_id, cfg.imu.mount, None),
-        (cfg.gnss.frame_id, cfg.gnss.mount, None),
-    ]
-    transforms = []
-    for frame_id, mount, extra in sensors:
-        rotation = mount_rotation(mount) if extra is None else mount_rotation(mount) @ extra
-        transforms.append(transform_stamped(stamp_ns, BASE_FRAME, frame_id,
-                                            (mount.x_m, mount.y_m, mount.z_m),
-                                            quaternion_from_matrix(rotation)))
-    return tf_message(transforms)
-
-
 class SimulatorNode:
     """Runs the simulation against connected clients until `stop` is set.
 
-    client : carries the bulk sensor data (LIDAR, radar, camera) and /tf_static.
-    realtime : carries the small, frequent messages (IMU, odometry, tf, GNSS, commands); by
-        default `client`. On its own connection an IMU sample never waits on the wire behind
-        a 4 MB scan (one TCP stream delivers in order: up to 5 ms per hop here).
+    client : carries the bulk sensor data (role "sensor": LIDAR, radar, camera), the latched
+        topics and the ground truth.
+    realtime : carries the small, frequent messages (role "realtime": IMU, odometry, tf, GNSS)
+        and the commands; by default `client`. On its own connection an IMU sample never waits
+        on the wire behind a 4 MB scan (one TCP stream delivers in order: up to 5 ms per hop).
     clock_ns : wall clock for capture stamps (injectable for tests).
-    tracer : records each sensor message's `generate` stage (capture → message ready).
+    tracer : records the `generate` stage (capture -> message ready) of the thesis's sensors.
+    sensors : what to run; by default simulator.sensors.SENSORS built for `cfg` and `scene`.
     """
 
     def __init__(self, client: RosbridgeClient, cfg: SimConfig, scene: Scene, *,
                  realtime: RosbridgeClient | None = None,
                  clock_ns: Callable[[], int] = time.time_ns,
-                 tracer: Tracer | None = None) -> None:
+                 tracer: Tracer | None = None,
+                 sensors: Sequence[Sensor] | None = None) -> None:
         self._client = client
         self._realtime = realtime or client
         self._tracer = tracer
@@ -129,42 +93,42 @@ class SimulatorNode:
         self.scene = scene
         self._clock_ns = clock_ns
         self.dynamics = VesselDynamics(cfg.vessel, scene)
-        self.state = VesselState.at(scene.start_pose)
+        self.latest_step = StepResult(VesselState.at(scene.start_pose), (0.0, 0.0), 0.0, False)
         self.command = Command()
         self.collisions = 0
-        self.lidar = Lidar(cfg.lidar, threads=2, seed=cfg.seed + 1)
-        self.radar = Radar(cfg.radar, seed=cfg.seed + 2)
-        self.camera = Camera(cfg.camera, threads=2)
-        self.imu = Imu(cfg.imu, seed=cfg.seed + 3)
-        self.gnss = Gnss(cfg.gnss, seed=cfg.seed + 4)
-        self.timings = {name: GenerationTimes() for name in (*HEAVY_SENSORS, "physics")}
+        self.sensors = list(sensors) if sensors is not None else build_sensors(cfg, scene)
+        self._physics_sensors = [s for s in self.sensors if s.schedule == "physics"]
+        self._workers = [s for s in self.sensors if s.schedule == "worker"]
+        keys = [s.topic.key for s in self._workers]
+        self.timings = {key: GenerationTimes() for key in (*keys, "physics")}
         self.physics_lateness = GenerationTimes()  # ms each physics tick started behind schedule
         self._truth_tasks: set[asyncio.Task[None]] = set()
-        self._executors = {name: ThreadPoolExecutor(1, thread_name_prefix=f"sim-{name}",
-                                                    initializer=background_priority)
-                           for name in HEAVY_SENSORS}
+        self._executors = {key: ThreadPoolExecutor(1, thread_name_prefix=f"sim-{key}",
+                                                   initializer=background_priority)
+                           for key in keys}
+
+    @property
+    def state(self) -> VesselState:
+        """The vessel after the latest physics step."""
+        return self.latest_step.state
+
+    def rate_hz(self, sensor: Sensor) -> float:
+        """How often `sensor` runs: its catalogue topic's rate key in this configuration."""
+        return float(config_value(self.cfg, sensor.topic.rate_key))
 
     async def run(self, stop: asyncio.Event) -> None:
         """Advertise, subscribe to commands, run every schedule until `stop`, then clean up."""
-        for name, (topic, type_name) in TOPICS.items():
-            await self._client_for(name).advertise(topic, type_name, latest_only=True)
-        await self._client.advertise(*TF_STATIC, latch=True)
-        await self._client.publish(TF_STATIC[0], static_transforms(self.cfg, self._clock_ns()))
-        await self._client.advertise(*SIM_CONFIG, latch=True)
-        await self._client.publish(SIM_CONFIG[0], {"data": self.cfg.model_dump_json()})
-        if self.cfg.ground_truth.enabled:
-            await self._advertise_truth()
-        commands = await self._realtime.subscribe(*COMMAND, maxsize=1)
-        generators = {"lidar": self._lidar, "radar": self._radar, "camera": self._camera}
-        rates = {"lidar": self.cfg.lidar.rate_hz, "radar": self.cfg.radar.rate_hz,
-                 "camera": self.cfg.camera.rate_hz}
+        await self._advertise()
+        commands = await self._realtime.subscribe(*TOPICS["cmd_wrench"].pair, maxsize=1)
         tasks = [asyncio.create_task(self._physics()), asyncio.create_task(self._follow(commands))]
-        # Stagger the heavy sensors over their period so their ray casts rarely overlap.
-        tasks += [asyncio.create_task(_every(1.0 / rates[name], self._sensor_tick(name, work),
-                                             self.timings[name], phase=k / len(generators)))
-                  for k, (name, work) in enumerate(generators.items())]
-        tasks += [asyncio.create_task(_every(1.0 / self.cfg.gnss.rate_hz, self._publish_gnss)),
-                  asyncio.create_task(_every(STATS_PERIOD_S, self._log_timings))]
+        # Stagger the worker sensors over their period so their ray casts rarely overlap.
+        for k, sensor in enumerate(self._workers):
+            tasks.append(asyncio.create_task(_every(
+                1.0 / self.rate_hz(sensor), self._worker_tick(sensor),
+                self.timings[sensor.topic.key], phase=k / len(self._workers))))
+        tasks += [asyncio.create_task(_every(1.0 / self.rate_hz(sensor), self._timer_tick(sensor)))
+                  for sensor in self.sensors if sensor.schedule == "timer"]
+        tasks.append(asyncio.create_task(_every(STATS_PERIOD_S, self._log_timings)))
         try:
             await stop.wait()
         finally:
@@ -175,29 +139,43 @@ class SimulatorNode:
                     await task
             for executor in self._executors.values():
                 executor.shutdown(wait=True, cancel_futures=True)
-            for sensor in (self.lidar, self.radar, self.camera):
+            for sensor in self.sensors:
                 sensor.close()
 
-    async def _advertise_truth(self) -> None:
-        for topic in TRUTH_TOPICS.values():
-            await self._client.advertise(topic, TRUTH_TYPE, latest_only=True)
-        await self._client.advertise(*GROUND_TRUTH, latch=True)
-        await self._client.publish(GROUND_TRUTH[0],
-                                   markers_msg(self.scene.objects, self._clock_ns()))
+    async def _advertise(self) -> None:
+        """Every sensor topic (latest-only), then the latched set-up: sensor mounts, the
+        effective configuration and, with ground truth, the scene's objects and the per-scan
+        truth topics."""
+        for sensor in self.sensors:
+            await self._link(sensor.topic).advertise(*sensor.topic.pair, latest_only=True)
+        now_ns = self._clock_ns()
+        await self._publish_latched(TOPICS["tf_static"], static_transforms(self.sensors, now_ns))
+        await self._publish_latched(TOPICS["sim_config"], {"data": self.cfg.model_dump_json()})
+        if self.cfg.ground_truth.enabled:
+            for topic in published_by("simulator", "truth"):
+                if not topic.latched:
+                    await self._client.advertise(*topic.pair, latest_only=True)
+            await self._publish_latched(TOPICS["ground_truth"],
+                                        markers_msg(self.scene.objects, now_ns))
 
-    def _client_for(self, sensor: str) -> RosbridgeClient:
-        return self._client if sensor in HEAVY_SENSORS else self._realtime
+    async def _publish_latched(self, topic: Topic, msg: dict[str, Any]) -> None:
+        await self._client.advertise(*topic.pair, latch=True)
+        await self._client.publish(topic.name, msg)
 
-    async def _follow(self, commands) -> None:
+    def _link(self, topic: Topic) -> RosbridgeClient:
+        """The connection a topic travels on: realtime ones never behind a scan."""
+        return self._realtime if topic.role == "realtime" else self._client
+
+    async def _follow(self, commands: Subscription) -> None:
         """Keep the newest `/cmd_wrench` as the actuator command."""
         async for received in commands:
             try:
                 self.command = Command.from_wrench(received.msg)
             except (KeyError, TypeError, ValueError):
-                log.exception("ignoring a malformed %s message", COMMAND[0])
+                log.exception("ignoring a malformed %s message", commands.topic)
 
     async def _physics(self) -> None:
-        """Step the vessel in real time at the fixed physics rate; publish IMU, odom and tf."""
+        """Step the vessel in real time at the fixed physics rate; publish the physics sensors."""
         loop = asyncio.get_running_loop()
         dt_s = self.dynamics.dt_s
         start_s, steps_done = loop.time(), 0
@@ -222,71 +200,61 @@ class SimulatorNode:
             await asyncio.sleep(max(0.0, start_s + steps_done * dt_s - loop.time()))
 
     def _step(self) -> StepResult:
-        result = self.dynamics.step(self.state, self.command)
-        self.state = result.state
+        result = self.dynamics.step(self.latest_step.state, self.command)
+        self.latest_step = result
         if result.collided:
             self.collisions += 1
         return result
 
     async def _publish_physics(self, result: StepResult, stamp_ns: int) -> None:
-        state, water_m = result.state, self.scene.water_level_m
-        imu_msg = self.imu.message(self.imu.measure(result), stamp_ns)
-        self._generated(TOPICS["imu"][0], stamp_ns)
-        await self._realtime.publish(TOPICS["imu"][0], imu_msg)
-        await self._realtime.publish(TOPICS["odom"][0], odometry(
-            state.pose, water_m, (state.u_mps, state.v_mps), state.r_radps, stamp_ns))
-        await self._realtime.publish(TOPICS["tf"][0], vessel_tf(state.pose, water_m, stamp_ns))
+        capture = Capture(result, stamp_ns)
+        for sensor in self._physics_sensors:
+            msg = sensor.generate(capture).msg
+            self._generated(sensor.topic, stamp_ns)
+            await self._link(sensor.topic).publish(sensor.topic.name, msg)
 
-    def _sensor_tick(self, name: str, work: Callable[[Any, int], Outputs]):
-        """A tick that captures pose and stamp now, generates on the sensor's thread, publishes
-        the sensor's message, and any ground truth that came with it TRUTH_DELAY_S later."""
-        loop = asyncio.get_running_loop()
+    def _timer_tick(self, sensor: Sensor) -> Callable[[], Awaitable[None]]:
+        """A tick that generates on the event loop from the latest step, stamped now."""
 
         async def tick() -> None:
-            pose, stamp_ns = self.state.pose, self._clock_ns()
+            capture = Capture(self.latest_step, self._clock_ns())
+            msg = sensor.generate(capture).msg
+            self._generated(sensor.topic, capture.stamp_ns)
+            await self._link(sensor.topic).publish(sensor.topic.name, msg)
+
+        return tick
+
+    def _worker_tick(self, sensor: Sensor) -> Callable[[], Awaitable[None]]:
+        """A tick that captures pose and stamp now, generates on the sensor's thread,
+        publishes the sensor's message, and any ground truth that came with it TRUTH_DELAY_S
+        later."""
+        loop = asyncio.get_running_loop()
+        topic = sensor.topic
+        executor, times = self._executors[topic.key], self.timings[topic.key]
+
+        async def tick() -> None:
+            capture = Capture(self.latest_step, self._clock_ns())
             started = time.perf_counter()
-            msg, *truth = await loop.run_in_executor(self._executors[name], work, pose, stamp_ns)
-            self.timings[name].record((time.perf_counter() - started) * 1e3)
-            self._generated(TOPICS[name][0], stamp_ns)
-            await self._client.publish(TOPICS[name][0], msg)
-            if truth:
-                task = asyncio.create_task(self._publish_truth(truth))
+            generated: Generated = await loop.run_in_executor(executor, sensor.generate, capture)
+            times.record((time.perf_counter() - started) * 1e3)
+            self._generated(topic, capture.stamp_ns)
+            await self._link(topic).publish(topic.name, generated.msg)
+            if generated.truth:
+                task = asyncio.create_task(self._publish_truth(generated.truth))
                 self._truth_tasks.add(task)
                 task.add_done_callback(self._truth_tasks.discard)
 
         return tick
 
-    async def _publish_truth(self, truth: Outputs) -> None:
+    async def _publish_truth(self, truth: tuple[tuple[str, dict[str, Any]], ...]) -> None:
         await asyncio.sleep(TRUTH_DELAY_S)
         for topic, msg in truth:
             await self._client.publish(topic, msg)
 
-    def _generated(self, topic: str, stamp_ns: int) -> None:
-        """Trace `generate`: capture (the stamp) → message ready (now)."""
-        if self._tracer is not None:
-            self._tracer.record(topic, stamp_ns, "generate", stamp_ns, self._clock_ns())
-
-    def _lidar(self, pose, stamp_ns: int) -> Outputs:
-        if not self.cfg.ground_truth.enabled:
-            return [self.lidar.message(self.lidar.scan(self.scene, pose), stamp_ns)]
-        scan = self.lidar.scan_with_sources(self.scene, pose)
-        truth = lidar_truth(self.scene, self.cfg.lidar, pose, scan.source, stamp_ns)
-        return [self.lidar.message(scan.points, stamp_ns), (TRUTH_TOPICS["lidar"], truth)]
-
-    def _radar(self, pose, stamp_ns: int) -> Outputs:
-        if not self.cfg.ground_truth.enabled:
-            return [self.radar.message(self.radar.sweep(self.scene, pose), stamp_ns)]
-        sweep = self.radar.sweep_with_sources(self.scene, pose)
-        truth = radar_truth(self.scene, self.cfg.radar, pose, sweep, stamp_ns)
-        return [self.radar.message(sweep.image, stamp_ns), (TRUTH_TOPICS["radar"], truth)]
-
-    def _camera(self, pose, stamp_ns: int) -> Outputs:
-        return [self.camera.message(self.camera.encode(self.camera.render(self.scene, pose)),
-                                    stamp_ns)]
-
-    async def _publish_gnss(self) -> None:
-        fix = self.gnss.fix(self.state.pose, self.scene.water_level_m)
-        await self._realtime.publish(TOPICS["gnss"][0], self.gnss.message(fix, self._clock_ns()))
+    def _generated(self, topic: Topic, stamp_ns: int) -> None:
+        """Trace `generate` of the thesis's sensors: capture (the stamp) -> message ready."""
+        if self._tracer is not None and topic.thesis_sensor:
+            self._tracer.record(topic.name, stamp_ns, "generate", stamp_ns, self._clock_ns())
 
     async def _log_timings(self) -> None:
         log.info("generation times: %s; physics lateness %s; collisions %d", "; ".join(

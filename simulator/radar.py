@@ -14,12 +14,15 @@ from typing import NamedTuple
 
 import numpy as np
 
-from simulator.config import RadarConfig
+from schemas.catalogue import TOPICS
+from simulator.config import RadarConfig, SimConfig
 from simulator.frames import Pose2D, rotate_rows, sensor_pose_in_map
 from simulator.messages import header
 from simulator.objects import LAND, NO_RETURN, WATER
 from simulator.raycast import RayCaster, fill_origins
 from simulator.scene import Scene
+from simulator.sensor import Capture, Generated, Schedule, SensorFrame
+from simulator.truth import radar_truth
 
 
 class RadarSweep(NamedTuple):
@@ -151,6 +154,31 @@ class Radar:
             "num_cells": int(geo.num_cells),
             "reflectance": np.ascontiguousarray(image, np.float32).reshape(-1),
         }
+
+
+class RadarSensor:
+    """The simulator's radar (simulator.sensor): a sweep per tick on its worker thread, and
+    with ``[ground_truth] enabled`` what filled each cell."""
+
+    topic = TOPICS["radar"]
+    schedule: Schedule = "worker"
+
+    def __init__(self, cfg: SimConfig, scene: Scene) -> None:
+        self._cfg, self._scene = cfg, scene
+        self.radar = Radar(cfg.radar, seed=cfg.seed + 2)
+        self.frame = SensorFrame(cfg.radar.frame_id, cfg.radar.mount)
+
+    def generate(self, capture: Capture) -> Generated:
+        pose, stamp_ns = capture.pose, capture.stamp_ns
+        if not self._cfg.ground_truth.enabled:
+            return Generated(self.radar.message(self.radar.sweep(self._scene, pose), stamp_ns))
+        sweep = self.radar.sweep_with_sources(self._scene, pose)
+        truth = radar_truth(self._scene, self._cfg.radar, pose, sweep, stamp_ns)
+        return Generated(self.radar.message(sweep.image, stamp_ns),
+                         ((TOPICS["radar_truth"].name, truth),))
+
+    def close(self) -> None:
+        self.radar.close()
 
 
 def _f32(value: float) -> float:

@@ -25,12 +25,13 @@ from collections.abc import Iterator
 from typing import TextIO
 
 from clients import ConnectionFailed, RosbridgeClient
+from schemas.catalogue import TOPICS
 from simulator.config import SimConfig, load_config
-from simulator.node import COMMAND
 from simulator.teleop import Action, KeyDecoder, TeleopCommand, TeleopScale
 
 log = logging.getLogger("simulator.teleop")
 
+COMMAND = TOPICS["cmd_wrench"].pair  # (topic, type) this client publishes
 HELP_LINE = "up/w down/s: surge   left/a right/d: yaw   space: zero   q: quit"
 READ_CHUNK_BYTES = 1024
 

@@ -10,7 +10,7 @@
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -18,8 +18,10 @@ from simulator.config import LidarConfig, RadarConfig
 from simulator.frames import Pose2D, quaternion_from_yaw, sensor_pose_in_map
 from simulator.messages import MAP_FRAME, header
 from simulator.objects import SceneObjects
-from simulator.radar import RadarSweep
 from simulator.scene import Scene
+
+if TYPE_CHECKING:
+    from simulator.radar import RadarSweep
 
 TRUTH_TYPE = "riverbridge_msgs/msg/GroundTruthArray"
 MARKERS_TYPE = "visualization_msgs/msg/MarkerArray"

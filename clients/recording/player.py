@@ -42,6 +42,7 @@ from clients.client import RosbridgeClient
 from clients.node_links import node_links
 from clients.recording.reading import RecordedMessage, read_recording
 from clients.recording.topics import BRIDGE_OWNED, TopicFilter
+from schemas.catalogue import published_by
 from schemas.codec_cdr import from_cdr
 from schemas.errors import SchemaError
 from schemas.interface_files import InterfaceSet
@@ -56,7 +57,8 @@ STAMP_MODES: tuple[StampMode, ...] = ("shift", "now", "keep")
 LOOKAHEAD = 256
 BATCH = 16  # messages decoded per worker-thread hop
 BULK_BYTES = 64 * 1024  # from this size a topic goes over the bulk connection
-LATCHED = ("/tf_static",)  # topics the simulator latches; replayed latched too
+# Topics the simulator latches (schemas.catalogue); replayed latched too.
+LATCHED = tuple(t.name for t in published_by("simulator") if t.latched)
 
 
 @dataclass

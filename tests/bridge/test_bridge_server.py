@@ -18,6 +18,7 @@ from websockets.exceptions import ConnectionClosed
 from bridge.config import BridgeConfig
 from bridge.server import RunningBridge, run_bridge
 from schemas import codec_cbor
+from schemas.pointcloud import pack_points
 
 pytestmark = pytest.mark.timeout(60)
 
@@ -31,13 +32,8 @@ async def bridge(registry) -> AsyncIterator[RunningBridge]:
 def point_cloud(num_points: int, seed: int = 0) -> tuple[dict, bytes]:
     """A PointCloud2 of `num_points` xyz+intensity float32 points, and its raw data."""
     points = np.random.default_rng(seed).random((num_points, 4), dtype=np.float32)
-    data = points.tobytes()
-    fields = [{"name": n, "offset": 4 * i, "datatype": 7, "count": 1}
-              for i, n in enumerate(["x", "y", "z", "intensity"])]
-    msg = {"header": {"stamp": {"sec": 1, "nanosec": 2}, "frame_id": "lidar"},
-           "height": 1, "width": num_points, "fields": fields, "is_bigendian": False,
-           "point_step": 16, "row_step": 16 * num_points, "data": data, "is_dense": True}
-    return msg, data
+    msg = pack_points(points, 1_000_000_002, "lidar")
+    return msg, msg["data"]
 
 
 def imu(seq: int) -> dict:

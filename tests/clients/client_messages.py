@@ -15,21 +15,14 @@ from PIL import Image
 
 from clients import Received, RosbridgeClient, Subscription
 from schemas.message import default_message
+from schemas.pointcloud import pack_points
 from schemas.registry import TypeRegistry
 
 
 def pointcloud(registry: TypeRegistry, n_points: int, seed: int = 0) -> dict[str, Any]:
     """A PointCloud2 of ``n_points`` XYZI float32 points (16 bytes each) in canonical form."""
-    msg = default_message(registry.message("sensor_msgs/msg/PointCloud2"))
-    msg["header"] = {"stamp": {"sec": 12, "nanosec": 345}, "frame_id": "lidar"}
-    msg["height"], msg["width"] = 1, n_points
-    msg["point_step"], msg["row_step"] = 16, 16 * n_points
-    msg["fields"] = [{"name": name, "offset": 4 * i, "datatype": 7, "count": 1}
-                     for i, name in enumerate(("x", "y", "z", "intensity"))]
     points = np.random.default_rng(seed).normal(size=(n_points, 4)).astype(np.float32)
-    msg["data"] = points.tobytes()
-    msg["is_dense"] = True
-    return msg
+    return pack_points(points, 12_000_000_345, "lidar")
 
 
 def imu(registry: TypeRegistry, seq: int = 0) -> dict[str, Any]:

@@ -109,6 +109,8 @@ await runScenario("drive_dashboard.mjs", 150000, async () => {
       delivery_first: deliveryFirst,
       delivery_second: deliverySecond,
       topics_text: await page.locator("#topics").innerText(),
+      topics_titles: await page.locator("#topics tr[title]").evaluateAll(
+        (rows) => rows.map((row) => row.title)),
       first_topics_text: firstTopics,
       page_errors: errors,
     };

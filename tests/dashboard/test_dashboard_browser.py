@@ -127,6 +127,10 @@ def test_topic_list_names_topics_types_rates_and_clients(seen: dict[str, Any]) -
     assert len(clients) >= 3, text  # simulator, navigation and the page itself
     imu_row = next(line for line in text.splitlines() if line.startswith("/imu/data"))
     assert float(imu_row.split("\t")[1]) > 5.0, imu_row
+    # the catalogue's word on each of its topics, on hover; the whole stack is up
+    assert "LIDAR scan, sensor frame · simulator · sensor" in seen["topics_titles"]
+    assert "LIDAR obstacle boxes · navigation · output" in seen["topics_titles"]
+    assert "expected, not published" not in text
 
 
 def test_restart_counts_of_up_are_shown(seen: dict[str, Any]) -> None:

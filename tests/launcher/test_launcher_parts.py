@@ -89,10 +89,10 @@ def test_output_prefixes_each_line_and_colours_only_when_asked() -> None:
 
 
 def test_readiness_topics_are_what_the_components_publish() -> None:
-    """`clients` may not import the simulator or navigation (DESIGN §2), so the launcher keeps
-    its own lists; they must stay equal to what the components advertise."""
+    """The launcher and the components read one catalogue (schemas.catalogue): `up` waits for
+    every sensor topic of the simulator and every output of navigation."""
     from navigation.processors import OUTPUT_TYPES
-    from simulator.node import TOPICS
+    from simulator.sensors import SENSORS
 
-    assert set(SIMULATOR_TOPICS) == {topic for topic, _ in TOPICS.values()}
+    assert set(SIMULATOR_TOPICS) == {factory.topic.name for factory in SENSORS}
     assert set(NAVIGATION_TOPICS) == set(OUTPUT_TYPES)

@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from navigation.config import LidarConfig
-from navigation.lidar_worker import ScanBoxes, scan_boxes
+from navigation.lidar import LidarResult, process_scan
 
 POLL_S = 0.01
 
@@ -28,9 +28,9 @@ class GatedScan:
     gate: Path
     timeout_s: float
 
-    def __call__(self, points: np.ndarray, config: LidarConfig) -> ScanBoxes:
+    def __call__(self, points: np.ndarray, config: LidarConfig) -> LidarResult:
         self.entered.touch()
         deadline_s = time.monotonic() + self.timeout_s
         while not self.gate.exists() and time.monotonic() < deadline_s:
             time.sleep(POLL_S)
-        return scan_boxes(points, config)
+        return process_scan(points, config)

@@ -10,7 +10,7 @@ from navigation.config import GroundConfig, LidarConfig
 from navigation.lidar import obstacle_points, process_scan
 from navigation.lidar_filter import estimate_water_level, range_mask, voxel_downsample
 from navigation.lidar_messages import box_array_msg, marker_array_msg
-from navigation.pointcloud import pointcloud2_msg, xyzi_view
+from schemas.pointcloud import pack_points, view_points
 
 MARGIN_M = 0.35  # object points this close to water or terrain may go with the background
 
@@ -159,9 +159,9 @@ def test_alternative_methods_produce_boxes(scan, method):
 
 def test_pipeline_accepts_a_pointcloud2_view(scan, check_canonical):
     _, points, _ = scan
-    msg = pointcloud2_msg(points, 1_500_000_000, "lidar")
+    msg = pack_points(points, 1_500_000_000, "lidar")
     check_canonical("sensor_msgs/msg/PointCloud2", msg)
-    view = xyzi_view(msg)
+    view = view_points(msg)
     assert np.shares_memory(view, np.frombuffer(msg["data"], np.uint8))
     np.testing.assert_array_equal(view, points)
     assert process_scan(view, LidarConfig()).num_clusters == 8
@@ -193,3 +193,11 @@ def test_empty_scan_gives_no_boxes(check_canonical):
     check_canonical(
         "visualization_msgs/msg/MarkerArray", marker_array_msg(result.boxes, 0, "lidar")
     )
+
+
+def test_pipeline_returns_the_spans_of_its_steps(scan):
+    _, points, _ = scan
+    steps = process_scan(points, LidarConfig()).steps
+    assert list(steps) == ["filter", "dbscan", "boxes"]
+    (f0, f1), (d0, d1), (b0, b1) = steps.values()
+    assert f0 <= f1 == d0 <= d1 == b0 <= b1  # back to back, in pipeline order

@@ -12,14 +12,8 @@ import pytest
 from nav_scenes import default_scene, lidar_directions, raycast
 
 from navigation.config import LidarConfig
-from navigation.lidar import process_scan
-from navigation.lidar_worker import (
-    ProcessLidarWorker,
-    ScanBoxes,
-    ThreadLidarWorker,
-    lidar_worker_for,
-    scan_boxes,
-)
+from navigation.lidar import LidarResult, process_scan
+from navigation.lidar_worker import ProcessLidarWorker, ThreadLidarWorker, lidar_worker_for
 
 pytestmark = pytest.mark.slow
 
@@ -38,12 +32,13 @@ def worker():
     lidar.close()
 
 
-def assert_same_boxes(got: ScanBoxes, points: np.ndarray) -> None:
+def assert_same_boxes(got: LidarResult, points: np.ndarray) -> None:
     expected = process_scan(points, LidarConfig())
     assert got.num_clusters == expected.num_clusters > 0
     np.testing.assert_array_equal(got.boxes.min_xyz, expected.boxes.min_xyz)
     np.testing.assert_array_equal(got.boxes.max_xyz, expected.boxes.max_xyz)
     np.testing.assert_array_equal(got.boxes.num_points, expected.boxes.num_points)
+    np.testing.assert_array_equal(got.labels, expected.labels)
 
 
 def test_process_worker_finds_the_boxes_of_the_in_process_step(worker, points):
@@ -88,9 +83,9 @@ def test_close_ends_the_worker_and_frees_the_buffer(points):
 def test_thread_worker_runs_the_step_in_the_caller(points):
     calls = []
 
-    def step(cloud: np.ndarray, config: LidarConfig) -> ScanBoxes:
+    def step(cloud: np.ndarray, config: LidarConfig) -> LidarResult:
         calls.append(cloud)
-        return scan_boxes(cloud, config)
+        return process_scan(cloud, config)
 
     worker = ThreadLidarWorker(LidarConfig(), step)
     worker.start()

@@ -18,13 +18,14 @@ from lidar_gate import GatedScan
 from nav_scenes import default_scene, lidar_directions, radar_noise_image, raycast
 
 from clients import RosbridgeClient
+from clients.tracing import Tracer
 from navigation.cli import main
 from navigation.config import NavigationConfig
 from navigation.lidar_worker import ProcessLidarWorker, ThreadLidarWorker
 from navigation.messages import header_msg
 from navigation.node import NavigationNode, serve
-from navigation.pointcloud import pointcloud2_msg
 from navigation.processors import Processors
+from schemas.pointcloud import pack_points
 
 pytestmark = pytest.mark.slow
 WAIT_S = 30.0
@@ -58,7 +59,7 @@ INPUTS = {
 
 def scan_msg(stamp_ns: int) -> dict[str, Any]:
     points, _ = raycast(default_scene(), lidar_directions(0.25, 0.25))
-    return pointcloud2_msg(points, stamp_ns, "lidar")
+    return pack_points(points, stamp_ns, "lidar")
 
 
 def radar_msg(stamp_ns: int) -> dict[str, Any]:
@@ -181,9 +182,9 @@ async def test_slow_lidar_neither_delays_camera_and_imu_nor_queues_scans(
     entered, gate = tmp_path / "entered", tmp_path / "gate"
     lidar = worker(config.lidar, GatedScan(entered, gate, WAIT_S))
     processors = Processors(config, lidar_worker=lidar)
-    stop = asyncio.Event()
+    stop, tracer = asyncio.Event(), Tracer("navigation")
     async with RosbridgeClient(bridge_url, connect_timeout=5.0, name="nav") as client:
-        node = NavigationNode(client, config, processors)
+        node = NavigationNode(client, config, processors, tracer=tracer)
         node_task = asyncio.create_task(node.run(stop))
         try:
             await wait_until(lambda: "imu" in node.subscriptions, "node subscriptions")
@@ -204,7 +205,10 @@ async def test_slow_lidar_neither_delays_camera_and_imu_nor_queues_scans(
             gate.touch()
             await wait_until(lambda: node.counters["lidar"].processed == 2, "newest scan")
             assert node.counters["lidar"].skipped == 2
-            assert processors.lidar_steps.keys() == {"filter", "dbscan", "boxes"}
+            # the pipeline's step timings, returned from the worker, reach the trace
+            stages = {s["stage"] for s in tracer.batch_msg()["spans"]
+                      if s["topic"] == "/lidar/points"}
+            assert {"process", "process.filter", "process.dbscan", "process.boxes"} <= stages
         finally:
             gate.touch()
             stop.set()

@@ -26,8 +26,8 @@ from bridge.server import run_bridge
 from clients import RosbridgeClient
 from navigation.messages import header_msg, stamp_ns_of
 from navigation.node import IMU_INPUT, SENSOR_INPUTS
-from navigation.pointcloud import pointcloud2_msg
 from navigation.processors import OUTPUT_TYPES, TOPIC_DIAGNOSTICS, TOPIC_MAP, TOPIC_MARKERS
+from schemas.pointcloud import pack_points
 
 pytestmark = pytest.mark.slow
 
@@ -105,7 +105,7 @@ def sensor_messages(stamp_ns: int, scan_points: np.ndarray) -> dict[str, dict[st
            "angular_velocity_covariance": [0.0] * 9,
            "linear_acceleration": {"x": 0.0, "y": 0.0, "z": 9.81},
            "linear_acceleration_covariance": [0.0] * 9}
-    return {SENSOR_INPUTS["lidar"][0]: pointcloud2_msg(scan_points, stamp_ns, "lidar"),
+    return {SENSOR_INPUTS["lidar"][0]: pack_points(scan_points, stamp_ns, "lidar"),
             SENSOR_INPUTS["radar"][0]: radar, SENSOR_INPUTS["camera"][0]: camera,
             IMU_INPUT[0]: imu}
 

@@ -128,10 +128,10 @@ def test_navigation_meets_the_targets_on_the_default_scene(profile):
         for k, pose in enumerate(poses if profile == "default" else poses[:1]):
             stamp = (k + 1) * 10**9
             scan = lidar.scan_with_sources(scene, pose)
-            [(_, boxes), _] = nav.lidar(lidar.message(scan.points, stamp))
+            [(_, boxes), _] = nav.lidar(lidar.message(scan.points, stamp)).outputs
             lidar_pairs.append((lidar_truth(scene, cfg.lidar, pose, scan.source, stamp), boxes))
             sweep = radar.sweep_with_sources(scene, pose)
-            [(_, detections)] = nav.radar(radar.message(sweep.image, stamp))
+            [(_, detections)] = nav.radar(radar.message(sweep.image, stamp)).outputs
             radar_pairs.append((radar_truth(scene, cfg.radar, pose, sweep, stamp), detections))
     finally:
         lidar.close()

@@ -11,13 +11,20 @@ import pytest
 from bridge.config import BridgeConfig
 from bridge.server import run_bridge
 from clients import RosbridgeClient
+from schemas.catalogue import TOPICS as CATALOGUE
+from schemas.catalogue import published_by
 from simulator.cli import main
 from simulator.config import CameraConfig, LidarConfig, SceneConfig, SimConfig
-from simulator.node import COMMAND, GROUND_TRUTH, TF_STATIC, TOPICS, TRUTH_TOPICS, serve
+from simulator.node import serve
 from simulator.scene import build_scene
-from simulator.truth import TRUTH_TYPE
 
 pytestmark = pytest.mark.slow
+
+# What the simulator streams, and more (schemas.catalogue): key -> (name, type)
+TOPICS = {t.key: t.pair for t in published_by("simulator", "sensor", "realtime")}
+TF_STATIC, GROUND_TRUTH = CATALOGUE["tf_static"].pair, CATALOGUE["ground_truth"].pair
+COMMAND = CATALOGUE["cmd_wrench"].pair
+TRUTH_TOPICS = {"lidar": CATALOGUE["lidar_truth"].pair, "radar": CATALOGUE["radar_truth"].pair}
 
 # A light configuration: coarse terrain and a 2-degree LIDAR keep the test fast on 2 cores.
 LIGHT = SimConfig(
@@ -52,7 +59,7 @@ async def test_every_topic_arrives_typed_and_stamped(bridge, registry, encoding)
         subs = {name: await listener.subscribe(topic, type_name, maxsize=100)
                 for name, (topic, type_name) in TOPICS.items()}
         static = await listener.subscribe(*TF_STATIC)
-        truth = {name: await listener.subscribe(topic, TRUTH_TYPE, maxsize=10)
+        truth = {name: await listener.subscribe(*topic, maxsize=10)
                  for name, topic in TRUTH_TOPICS.items()}
         sim = asyncio.create_task(serve(bridge.url, LIGHT, stop, encoding=encoding, scene=scene))
         try:

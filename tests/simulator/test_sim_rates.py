@@ -17,21 +17,24 @@ import pytest
 from sim_processes import header_stamp_s, running, running_bridge, simulator_argv
 
 from clients import RosbridgeClient
+from schemas.catalogue import TOPICS as CATALOGUE
+from schemas.catalogue import published_by
 from simulator.config import SimConfig
-from simulator.node import TOPICS
+from simulator.sensor import config_value
 
 pytestmark = pytest.mark.slow
 
+# Every sensor topic the simulator streams (schemas.catalogue): key -> (name, type)
+TOPICS = {t.key: t.pair for t in published_by("simulator", "sensor", "realtime")}
 WARMUP_S = 2.0  # the first scans pay for Embree's and OpenCV's lazy set-up
 WINDOW_S = 10.0
 TOLERANCE = 0.10
 
 
 def configured_rates_hz(cfg: SimConfig) -> dict[str, float]:
-    physics_hz = cfg.vessel.physics_rate_hz  # IMU, odometry and tf are published every step
-    return {"lidar": cfg.lidar.rate_hz, "radar": cfg.radar.rate_hz,
-            "camera": cfg.camera.rate_hz, "imu": physics_hz, "gnss": cfg.gnss.rate_hz,
-            "odom": physics_hz, "tf": physics_hz}
+    """Each topic's rate in `cfg`, from the catalogue's rate keys (IMU, odometry and tf: the
+    physics rate)."""
+    return {key: config_value(cfg, CATALOGUE[key].rate_key) for key in TOPICS}
 
 
 async def record_stamps(url: str, registry, warmup_s: float,

@@ -11,7 +11,8 @@ import pytest
 from sim_processes import header_stamp_s, running, running_bridge, simulator_argv
 
 from clients import RosbridgeClient
-from simulator.node import TF_STATIC, TOPICS
+from schemas.catalogue import TOPICS as CATALOGUE
+from schemas.catalogue import published_by
 
 pytestmark = pytest.mark.slow
 
@@ -28,13 +29,15 @@ vertical_resolution_deg = 2.0
 width_px = 160
 height_px = 120
 """
+# Every sensor topic the simulator streams (schemas.catalogue): key -> (name, type)
+TOPICS = {t.key: t.pair for t in published_by("simulator", "sensor", "realtime")}
 DOWN_S = 2.0  # the simulator keeps running (and retrying) this long without a bridge
 RESUME_TIMEOUT_S = 20.0
 
 
 async def first_of_each(url: str, registry, timeout_s: float) -> dict[str, dict]:
     """The first message of every simulator topic (and the latched /tf_static)."""
-    topics = {**{name: TOPICS[name] for name in TOPICS}, "tf_static": TF_STATIC}
+    topics = {**TOPICS, "tf_static": CATALOGUE["tf_static"].pair}
     async with RosbridgeClient(url, registry=registry, connect_timeout=timeout_s) as listener:
         subs = {name: await listener.subscribe(*topic, maxsize=1)
                 for name, topic in topics.items()}

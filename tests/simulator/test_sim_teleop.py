@@ -19,8 +19,8 @@ from sim_processes import REPO_ROOT, running, running_bridge, simulator_argv
 from bridge.config import BridgeConfig
 from bridge.server import run_bridge
 from clients import RosbridgeClient
+from schemas.catalogue import TOPICS
 from simulator.config import VesselConfig
-from simulator.node import COMMAND, TOPICS
 from simulator.teleop import Action, KeyDecoder, TeleopCommand, TeleopScale
 from simulator.teleop_cli import main
 
@@ -140,7 +140,7 @@ async def test_cli_publishes_on_keys_steadily_and_zero_on_quit(monkeypatch, regi
     read_fd, write_fd = os.pipe()
     async with (run_bridge(BridgeConfig(host="127.0.0.1", port=0)) as bridge,
                 RosbridgeClient(bridge.url, registry=registry) as listener):
-        sub = await listener.subscribe(*COMMAND, maxsize=1000)
+        sub = await listener.subscribe(*TOPICS["cmd_wrench"].pair, maxsize=1000)
         with os.fdopen(read_fd) as keys_in:
             monkeypatch.setattr(sys, "stdin", keys_in)
             cli = asyncio.create_task(asyncio.to_thread(
@@ -206,7 +206,7 @@ async def test_teleop_in_a_terminal_steers_the_simulated_vessel(tmp_path, regist
                 env={**os.environ, "PYTHONPATH": str(REPO_ROOT)})
             try:
                 async with RosbridgeClient(url, registry=registry, connect_timeout=60) as c:
-                    odom = await c.subscribe(*TOPICS["odom"], maxsize=1000)
+                    odom = await c.subscribe(*TOPICS["odom"].pair, maxsize=1000)
                     await asyncio.to_thread(sim.wait_for_line, re.compile("simulator connected"))
                     await asyncio.to_thread(wait_for_output, controller, "q: quit", 60.0)
                     before = await latest_odom(odom)

@@ -129,7 +129,7 @@ def test_water_models(model, pitch_deg, returns):
 
 
 def test_xyz_clouds_are_12_byte_points_navigation_reads(check_canonical):
-    from navigation.pointcloud import xyz_view
+    from schemas.pointcloud import XYZ, view_points
 
     points = np.arange(20, dtype=np.float32).reshape(5, 4)
     lidar = Lidar(LidarConfig(point_fields="xyz"), threads=1)
@@ -140,7 +140,7 @@ def test_xyz_clouds_are_12_byte_points_navigation_reads(check_canonical):
     check_canonical("sensor_msgs/msg/PointCloud2", msg)
     assert msg["point_step"] == 12 and len(msg["data"]) == 60
     assert [f["name"] for f in msg["fields"]] == ["x", "y", "z"]
-    np.testing.assert_array_equal(xyz_view(msg), points[:, :3])
+    np.testing.assert_array_equal(view_points(msg, XYZ), points[:, :3])
 
 
 def test_the_thesis_profile_sets_its_payload_unless_the_file_says_otherwise():

@@ -1,6 +1,8 @@
 // Arrow keys steer the vessel through /cmd_wrench (geometry_msgs/msg/Wrench): up/down push
 // forward/back (force.x, N), left/right turn to port/starboard (torque.z, N·m, counter-clockwise
 // positive). The command is re-sent while keys are held and zeroed when they are released.
+import { topic } from "./catalogue.js";
+
 const MAX_SURGE_FORCE_N = 4000; // simulator VesselConfig.max_surge_force_n (the actuator limit)
 const MAX_YAW_MOMENT_NM = 6000; // simulator VesselConfig.max_yaw_moment_nm
 const REPEAT_MS = 100;
@@ -67,7 +69,8 @@ export class KeyboardSteering {
 
   #send() {
     const { surge_n, yaw_nm } = this.command();
-    this.connection.publish("/cmd_wrench", "geometry_msgs/msg/Wrench", {
+    const { name, type } = topic("cmd_wrench");
+    this.connection.publish(name, type, {
       force: { x: surge_n, y: 0, z: 0 },
       torque: { x: 0, y: 0, z: yaw_nm },
     });

@@ -3,6 +3,7 @@
 // what changed. `window.riverbridgeDashboard` exposes counters for the browser tests and the
 // frame-time benchmark.
 import "./style.css";
+import { DASHBOARD_TOPICS, topic } from "./catalogue.js";
 import { Connection, bridgeUrl } from "./connection.js";
 import { KeyboardSteering } from "./keyboard.js";
 import { startLidarWorker } from "./lidar/feed.js";
@@ -16,29 +17,19 @@ import { RateMeter } from "./rolling.js";
 import { stampMs, yawOf } from "./rosmsg.js";
 import { ArrivalAges, TraceStats } from "./trace.js";
 
-// Per topic: type, and the fastest the bridge may send it to this page (throttle_rate, ms).
-// queue_length 1 makes the bridge drop stale messages for a slow page instead of queueing.
-// /lidar/points is not here: its 2.9 MB scans are decoded and decimated in a worker (LIDAR).
-const SUBSCRIPTIONS = {
-  "/radar/image": ["riverbridge_msgs/msg/RadarImage", 250],
-  "/camera/image/compressed": ["sensor_msgs/msg/CompressedImage", 100],
-  "/imu/data": ["sensor_msgs/msg/Imu", 10],
-  "/odom": ["nav_msgs/msg/Odometry", 50],
-  "/tf_static": ["tf2_msgs/msg/TFMessage", 0],
-  "/nav/boxes": ["riverbridge_msgs/msg/BoxArray", 100],
-  "/nav/radar_detections": ["riverbridge_msgs/msg/RadarDetectionArray", 100],
-  "/nav/lines": ["riverbridge_msgs/msg/ImageLineArray", 100],
-  "/nav/obstacle_map": ["nav_msgs/msg/OccupancyGrid", 250],
-  "/riverbridge/trace": ["riverbridge_msgs/msg/TraceSpanArray", 0],
-  "/riverbridge/process_stats": ["riverbridge_msgs/msg/ProcessStats", 0],
-  "/riverbridge/restarts": ["diagnostic_msgs/msg/DiagnosticArray", 0], // latched, from `up`
-};
-const LIDAR = { topic: "/lidar/points", messageType: "sensor_msgs/msg/PointCloud2",
+// The page subscribes to every catalogue topic whose consumers include "dashboard" (names and
+// types from the catalogue), at most as often as THROTTLE_MS (catalogue key -> throttle_rate,
+// ms) allows. queue_length 1 makes the bridge drop stale messages for a slow page instead of
+// queueing. The LIDAR's 2.9 MB scans are decoded and decimated in a worker (LIDAR).
+const THROTTLE_MS = { radar: 250, camera: 100, imu: 10, odom: 50, tf_static: 0, boxes: 100,
+  radar_detections: 100, lines: 100, obstacle_map: 250, trace: 0, process_stats: 0, restarts: 0 };
+const LIDAR = { topic: topic("lidar").name, messageType: topic("lidar").type,
   throttleMs: 250, maxPoints: 40000 }; // 40k of a ~180k scan: more adds no visible detail
-const ALL_TOPICS = [...Object.keys(SUBSCRIPTIONS), LIDAR.topic];
+const SUBSCRIPTIONS = DASHBOARD_TOPICS.filter((t) => t.name !== LIDAR.topic);
+const ALL_TOPICS = DASHBOARD_TOPICS.map((t) => t.name);
 // Topics whose header.stamp is a capture time: their age on arrival is shown as latency.
-const AGED_TOPICS = new Set(["/radar/image", "/camera/image/compressed", "/imu/data", "/odom",
-  "/nav/boxes", "/nav/radar_detections", "/nav/lines", "/nav/obstacle_map"]);
+const AGED_TOPICS = new Set(["radar", "camera", "imu", "odom", "boxes", "radar_detections",
+  "lines", "obstacle_map"].map((key) => topic(key).name));
 
 function startDashboard() {
   const url = bridgeUrl(window.location);
@@ -70,11 +61,13 @@ function startDashboard() {
     handle(now);
     handlerWorstMs[topic] = Math.max(handlerWorstMs[topic] ?? 0, performance.now() - now);
   };
-  for (const [topic, [type, throttleMs]] of Object.entries(SUBSCRIPTIONS)) {
-    const options = { compression: "cbor", throttle_rate: throttleMs, queue_length: 1 };
-    connection.subscribe(topic, type, options, (message) => received(topic, (now) => {
-      if (AGED_TOPICS.has(topic)) ages.record(topic, Date.now() - stampMs(message.header));
-      handlers[topic](message, now);
+  for (const { key, name, type } of SUBSCRIPTIONS) {
+    const handle = handlers[key];
+    if (!handle || !(key in THROTTLE_MS)) throw new Error(`no handler or throttle for ${name}`);
+    const options = { compression: "cbor", throttle_rate: THROTTLE_MS[key], queue_length: 1 };
+    connection.subscribe(name, type, options, (message) => received(name, (now) => {
+      if (AGED_TOPICS.has(name)) ages.record(name, Date.now() - stampMs(message.header));
+      handle(message, now);
     }));
   }
   const lidar = startLidarWorker({ url, ...LIDAR }, (cloud) => {
@@ -97,24 +90,24 @@ function startDashboard() {
     panels, handlerWorstMs };
 }
 
-/** Topic -> fn(message, receivedMs) for the topics of the page's own connection. */
+/** Catalogue key -> fn(message, receivedMs) for the topics of the page's own connection. */
 function messageHandlers(panels, trace, vessel) {
   return {
-    "/radar/image": (m) => panels.radar.onImage(m),
-    "/camera/image/compressed": (m) => panels.camera.onImage(m),
-    "/imu/data": (m, now) => panels.imu.onImu(m, now),
-    "/odom": (m) => Object.assign(vessel, odometryReadout(m)),
-    "/tf_static": (m) => panels.map.onStaticTf(m),
-    "/nav/boxes": (m) => panels.map.onBoxes(m),
-    "/nav/radar_detections": (m) => {
+    radar: (m) => panels.radar.onImage(m),
+    camera: (m) => panels.camera.onImage(m),
+    imu: (m, now) => panels.imu.onImu(m, now),
+    odom: (m) => Object.assign(vessel, odometryReadout(m)),
+    tf_static: (m) => panels.map.onStaticTf(m),
+    boxes: (m) => panels.map.onBoxes(m),
+    radar_detections: (m) => {
       panels.map.onDetections(m);
       panels.radar.onDetections(m);
     },
-    "/nav/lines": (m) => panels.camera.onLines(m),
-    "/nav/obstacle_map": (m) => panels.map.onGrid(m),
-    "/riverbridge/trace": (m) => trace.onSpans(m),
-    "/riverbridge/process_stats": (m) => panels.topics.onProcessStats(m),
-    "/riverbridge/restarts": (m) => panels.topics.onRestarts(m),
+    lines: (m) => panels.camera.onLines(m),
+    obstacle_map: (m) => panels.map.onGrid(m),
+    trace: (m) => trace.onSpans(m),
+    process_stats: (m) => panels.topics.onProcessStats(m),
+    restarts: (m) => panels.topics.onRestarts(m),
   };
 }
 

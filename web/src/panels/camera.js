@@ -1,6 +1,7 @@
 // Camera image with the extracted lines drawn over it (thesis figure 20). JPEGs are decoded by
 // the browser off the main thread (createImageBitmap); the previous bitmap is freed at once.
 import { beginPanelFrame, COLORS } from "../canvas.js";
+import { topic } from "../catalogue.js";
 import { bytesOf } from "../rosmsg.js";
 
 export class CameraPanel {
@@ -38,7 +39,7 @@ export class CameraPanel {
   }
 
   draw() {
-    const frame = beginPanelFrame(this, "/camera/image/compressed", Boolean(this.bitmap));
+    const frame = beginPanelFrame(this, topic("camera").name, Boolean(this.bitmap));
     if (!frame) return;
     const { ctx, width, height } = frame;
     const scale = Math.min(width / this.bitmap.width, height / this.bitmap.height);

@@ -1,5 +1,6 @@
 // IMU angular rates and linear accelerations as rolling plots (thesis figure 15), 20 s window.
 import { beginPanelFrame, COLORS } from "../canvas.js";
+import { topic } from "../catalogue.js";
 import { RollingSeries } from "../rolling.js";
 
 const WINDOW_MS = 20000;
@@ -23,7 +24,7 @@ export class ImuPanel {
   }
 
   draw(nowMs) {
-    const frame = beginPanelFrame(this, "/imu/data", this.rates.count > 0);
+    const frame = beginPanelFrame(this, topic("imu").name, this.rates.count > 0);
     if (!frame) return;
     const { ctx, width, height } = frame;
     const half = height / 2;

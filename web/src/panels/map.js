@@ -4,6 +4,7 @@
 // message arrives; a frame just composites them. The LIDAR layer arrives as a finished bitmap
 // from the LIDAR worker, which is told the view (`onView`) whenever it changes.
 import { COLORS, drawWaiting, fitCanvas } from "../canvas.js";
+import { topic } from "../catalogue.js";
 
 const VESSEL_LENGTH_M = 7.0; // simulator VesselConfig.length_m
 const VESSEL_BEAM_M = 2.5; // simulator VesselConfig.beam_m
@@ -104,7 +105,7 @@ export class MapPanel {
     this.#drawDetections(ctx, view);
     this.#drawVessel(ctx, view);
     this.#drawLegend(ctx, width, height);
-    if (!this.pointsBitmap && !this.grid) drawWaiting(ctx, width, height * 0.3, "/lidar/points");
+    if (!this.pointsBitmap && !this.grid) drawWaiting(ctx, width, height * 0.3, topic("lidar").name);
   }
 
   /** Tell the LIDAR worker the view in device pixels, when it differs from the last one sent. */

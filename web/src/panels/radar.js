@@ -4,6 +4,7 @@
 // Each sweep is painted through a pixel -> cell lookup table built once per geometry, so a new
 // image costs one pass over a small square raster, not one path per cell.
 import { beginPanelFrame, COLORS } from "../canvas.js";
+import { topic } from "../catalogue.js";
 import { stampMs } from "../rosmsg.js";
 
 const RASTER_PX = 256; // side of the polar -> Cartesian raster, scaled up when drawn
@@ -38,7 +39,7 @@ export class RadarPanel {
   }
 
   draw() {
-    const frame = beginPanelFrame(this, "/radar/image", Boolean(this.sweep));
+    const frame = beginPanelFrame(this, topic("radar").name, Boolean(this.sweep));
     if (!frame) return;
     const { ctx, width, height } = frame;
     const radiusPx = Math.max(10, Math.min(width, height) / 2 - 14);

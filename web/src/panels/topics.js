@@ -1,6 +1,10 @@
-// Topics with their types and the rates this page receives them at, the connected clients
-// (rosapi `topics`, `nodes`), each process's CPU, memory and drops (/riverbridge/process_stats)
-// and how often `riverbridge up` restarted each component (/riverbridge/restarts).
+// Topics with their types, the rates this page receives them at and, on hover, what the
+// catalogue (schemas/catalogue.py) says of them; the stack's streams nobody publishes; the
+// connected clients (rosapi `topics`, `nodes`); each process's CPU, memory and drops
+// (/riverbridge/process_stats) and how often `riverbridge up` restarted each component
+// (/riverbridge/restarts).
+import { BY_NAME, EXPECTED_TOPICS } from "../catalogue.js";
+
 const POLL_MS = 2000;
 const MIB = 1024 * 1024;
 
@@ -54,8 +58,18 @@ export class TopicsPanel {
     for (const [name, type] of this.topics) {
       const meter = this.rates.get(name);
       const rate = meter ? meter.rateHz(nowMs).toFixed(1) : "";
-      rows.push(`<tr${meter && rate === "0.0" ? " class=\"stale\"" : ""}><td>${esc(name)}</td>` +
+      const stale = meter && rate === "0.0" ? " class=\"stale\"" : "";
+      rows.push(`<tr${stale}${about(BY_NAME.get(name))}><td>${esc(name)}</td>` +
         `<td class="num">${rate}</td><td class="type">${esc(type)}</td></tr>`);
+    }
+    const listed = new Set(this.topics.map(([name]) => name));
+    const missing = EXPECTED_TOPICS.filter((t) => !listed.has(t.name));
+    if (missing.length > 0) {
+      rows.push(`<tr class="section"><td colspan="3">${missing.length} expected, not published</td></tr>`);
+      for (const t of missing) {
+        rows.push(`<tr class="stale"${about(t)}><td>${esc(t.name)}</td><td class="num"></td>` +
+          `<td class="type">${esc(t.type)}</td></tr>`);
+      }
     }
     rows.push(`<tr class="section"><td colspan="3">${this.nodes.length} nodes and clients</td></tr>`);
     for (const node of this.nodes) rows.push(`<tr><td colspan="3">${esc(node)}</td></tr>`);
@@ -76,6 +90,11 @@ export class TopicsPanel {
     }
     this.element.innerHTML = `<table id="topics-table">${rows.join("")}</table>`;
   }
+}
+
+/** A row's tooltip from its catalogue entry: "LIDAR scan, sensor frame · simulator · sensor". */
+function about(entry) {
+  return entry ? ` title="${esc(`${entry.summary} · ${entry.producer} · ${entry.role}`)}"` : "";
 }
 
 function esc(text) {
