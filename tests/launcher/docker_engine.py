@@ -13,6 +13,7 @@ when none runs and this process is root.
 from __future__ import annotations
 
 import contextlib
+import fcntl
 import os
 import re
 import shutil
@@ -62,7 +63,19 @@ def engine_answers() -> bool:
 @contextlib.contextmanager
 def docker_engine() -> Iterator[None]:
     """A running engine for the block: the one already running, or one started here (and
-    stopped after). Raises :class:`EngineUnavailable` with the reason otherwise."""
+    stopped after). Raises :class:`EngineUnavailable` with the reason otherwise.
+
+    Test sessions on one machine take turns (a lock file): a session that started dockerd
+    stops it at the end, which must not pull the engine from under another session's build.
+    """
+    with open(cache_dir() / "engine.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        with _engine():
+            yield
+
+
+@contextlib.contextmanager
+def _engine() -> Iterator[None]:
     if shutil.which("docker") is None:
         raise EngineUnavailable("no docker client (scripts/setup.sh installs docker.io)")
     if engine_answers():
