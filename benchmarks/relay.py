@@ -1,0 +1,398 @@
+"""Relay through the bridge: one publisher process and one subscriber process, one websocket
+each (as roslibjs, ROS#, Unity and Foxglove clients connect), JSON and CBOR.
+
+Workloads (issue 11), each printed beside the reference rosbridge_suite 0.11.17 figures measured
+on this machine in the issue:
+
+1. burst: 15,000 ~100-byte ``std_msgs/String`` sent as fast as the publisher can while the
+   subscriber reads as fast as it can: delivered, loss, delivered/s, ages;
+2. sustained: the same messages for ``--seconds``, delivered/s and loss;
+3. scan + IMU: a full 345,600-point ``sensor_msgs/PointCloud2`` (5.5 MB) at 2 Hz and a 50 Hz
+   ``sensor_msgs/Imu`` on the same publisher connection and the same subscriber connection:
+   scan age p50/p99/max and IMU age p99/max.
+
+Ages run from just before the publisher encodes (the stamp inside the message) to just after
+the subscriber decoded, on one wall clock. The clients are plain ``websockets`` connections
+that behave like a careful third-party client: big frames are encoded and decoded on a worker
+thread, in order, so the clients add as little as they can.
+
+Usage: python benchmarks/relay.py [--only burst,sustained,scan] [--encodings json,cbor]
+       [--url ws://host:port] [-- bridge options...]
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import multiprocessing as mp
+import os
+import re
+import subprocess
+import sys
+import time
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass, field
+from multiprocessing.connection import Connection
+from typing import Any
+
+import numpy as np
+
+TUNED_MALLOC = {"MALLOC_MMAP_THRESHOLD_": "268435456", "MALLOC_TRIM_THRESHOLD_": "1073741824",
+                "MALLOC_TOP_PAD_": "67108864"}
+SCAN_POINTS = 345_600  # the thesis' LIDAR (Table 4.3): x, y, z, intensity float32 -> 5.5 MB
+BIG_FRAME_BYTES = 64 * 1024  # frames this large are encoded/decoded on the client's thread
+STRING_BYTES = 100
+IDLE_END_S = 3.0  # the subscriber stops this long after the last frame once the publisher is done
+WARMUP_S = 1.0  # scan workload: samples stamped in the first second are not counted
+
+# Reference rosbridge_suite 0.11.17 figures from issue 11, same machine, one sitting.
+REFERENCE = {
+    "burst": "10,041 of 15,000 delivered",
+    "sustained": "3,300-3,600 msg/s",
+    "scan-cbor": "does not accept CBOR publishes",
+    "scan-json": "scan p50 1,595 ms, IMU p99 546 ms",
+}
+TARGET = {
+    "burst": "all 15,000 delivered",
+    "sustained": ">= 20,000 msg/s, lossless",
+    "scan-cbor": "scan p50 <= 12 ms, IMU p99 <= 5 ms",
+    "scan-json": "scan p50 <= 45 ms, IMU p99 <= 5 ms",
+}
+
+
+# -- messages ----------------------------------------------------------------------------------
+
+def stamp(ns: int) -> dict[str, int]:
+    return {"sec": ns // 1_000_000_000, "nanosec": ns % 1_000_000_000}
+
+
+def string_msg(seq: int) -> dict[str, str]:
+    head = f"{seq:010d} {time.time_ns():019d} "
+    return {"data": head + "x" * (STRING_BYTES - len(head))}
+
+
+def imu_msg() -> dict[str, Any]:
+    return {"header": {"stamp": stamp(time.time_ns()), "frame_id": "imu"},
+            "orientation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0},
+            "angular_velocity": {"x": 0.01, "y": 0.02, "z": 0.03},
+            "linear_acceleration": {"x": 0.1, "y": 0.2, "z": 9.81}}
+
+
+def scan_msg(data: bytes) -> dict[str, Any]:
+    fields = [{"name": n, "offset": 4 * i, "datatype": 7, "count": 1}
+              for i, n in enumerate(["x", "y", "z", "intensity"])]
+    return {"header": {"stamp": stamp(time.time_ns()), "frame_id": "lidar"}, "height": 1,
+            "width": SCAN_POINTS, "fields": fields, "is_bigendian": False, "point_step": 16,
+            "row_step": 16 * SCAN_POINTS, "data": data, "is_dense": True}
+
+
+def sent_ns(topic: str, msg: dict[str, Any]) -> tuple[int, int]:
+    """(sequence number or -1, publisher stamp in ns) of a received message."""
+    if topic == "/chatter":
+        data = msg["data"]
+        return int(data[:10]), int(data[11:30])
+    head = msg["header"]["stamp"]
+    return -1, head["sec"] * 1_000_000_000 + head["nanosec"]
+
+
+# -- a careful raw client ------------------------------------------------------------------------
+
+class RawClient:
+    """One websocket; big frames encoded and decoded on one thread each, order kept."""
+
+    def __init__(self, url: str, binary: bool) -> None:
+        self.url = url
+        self.binary = binary
+        self.ws: Any = None
+        self._encoder = ThreadPoolExecutor(1)
+        self._decoder = ThreadPoolExecutor(1)
+        self._tasks: list[asyncio.Task[None]] = []
+
+    async def __aenter__(self) -> RawClient:
+        import websockets
+        self.ws = await websockets.connect(self.url, max_size=None, compression=None,
+                                           max_queue=64)
+        return self
+
+    async def __aexit__(self, *exc: object) -> None:
+        for task in self._tasks:
+            task.cancel()
+        await self.ws.close()
+        self._encoder.shutdown()
+        self._decoder.shutdown()
+
+    def _encode(self, op: dict[str, Any]) -> bytes | str:
+        from schemas import codec_cbor, codec_json
+        if self.binary and op["op"] == "publish":
+            return codec_cbor.dumps(op)
+        return codec_json.dumps(op).decode("ascii")
+
+    async def send(self, op: dict[str, Any], big: bool = False) -> None:
+        if big:
+            frame = await asyncio.get_running_loop().run_in_executor(self._encoder,
+                                                                     self._encode, op)
+        else:
+            frame = self._encode(op)
+        await self.ws.send(frame)
+
+    async def call(self, service: str) -> None:
+        """A round trip: everything sent before it has been handled by the bridge."""
+        await self.send({"op": "call_service", "service": service, "id": "sync"})
+
+    def frames(self) -> asyncio.Queue[tuple[int, Any]]:
+        """A queue of (decoded_ns, op) for every frame; small frames are decoded at once and
+        overtake big ones being decoded on the thread (big frames keep their own order)."""
+        from schemas import codec_cbor, codec_json
+
+        def decode(data: bytes | str) -> Any:
+            return codec_json.loads(data) if isinstance(data, str) else codec_cbor.loads(data)
+
+        loop = asyncio.get_running_loop()
+        out: asyncio.Queue[tuple[int, Any]] = asyncio.Queue()
+        big: asyncio.Queue[asyncio.Future[Any]] = asyncio.Queue()
+
+        async def read() -> None:
+            async for data in self.ws:
+                if len(data) >= BIG_FRAME_BYTES:
+                    big.put_nowait(loop.run_in_executor(self._decoder, decode, data))
+                else:
+                    out.put_nowait((time.time_ns(), decode(data)))
+
+        async def finish_big() -> None:
+            while True:
+                op = await (await big.get())
+                out.put_nowait((time.time_ns(), op))
+
+        self._tasks = [asyncio.create_task(read()), asyncio.create_task(finish_big())]
+        return out
+
+
+# -- the two roles ---------------------------------------------------------------------------------
+
+@dataclass
+class Received:
+    """What a subscriber saw of one topic."""
+
+    count: int = 0
+    out_of_order: int = 0
+    last_seq: int = -1
+    first_ns: int = 0
+    last_ns: int = 0
+    ages_ms: list[float] = field(default_factory=list)
+
+
+async def subscriber(pipe: Connection, url: str, binary: bool,
+                     topics: list[tuple[str, str]]) -> None:
+    compression = "cbor" if binary else "none"
+    seen: dict[str, Received] = {t: Received() for t, _ in topics}
+    done = asyncio.Event()
+    expected: dict[str, int] = {}
+    async with await open_client(url, binary) as sub:
+        for topic, type_name in topics:
+            await sub.send({"op": "subscribe", "topic": topic, "type": type_name,
+                            "compression": compression})
+        await sub.call("/rosapi/get_time")
+        frames = sub.frames()
+        while (await frames.get())[1].get("op") != "service_response":
+            pass  # the round trip's answer: the subscriptions are in place
+        pipe.send("ready")
+
+        async def wait_for_publisher() -> None:
+            expected.update(await asyncio.to_thread(pipe.recv))
+            done.set()
+
+        waiter = asyncio.create_task(wait_for_publisher())
+        last_frame = time.monotonic()
+        while True:
+            try:
+                recv_ns, op = await asyncio.wait_for(frames.get(), 0.5)
+            except TimeoutError:
+                if done.is_set() and (time.monotonic() - last_frame > IDLE_END_S or all(
+                        seen[t].count >= n for t, n in expected.items())):
+                    break
+                continue
+            last_frame = time.monotonic()
+            if op.get("op") != "publish":
+                continue
+            record(seen[op["topic"]], recv_ns, *sent_ns(op["topic"], op["msg"]))
+            if done.is_set() and all(seen[t].count >= n for t, n in expected.items()):
+                break
+        waiter.cancel()
+    pipe.send({t: r.__dict__ for t, r in seen.items()})
+
+
+def record(seen: Received, recv_ns: int, seq: int, stamp_ns: int) -> None:
+    seen.count += 1
+    if seq >= 0:
+        if seq <= seen.last_seq:
+            seen.out_of_order += 1
+        seen.last_seq = seq
+    seen.first_ns = seen.first_ns or recv_ns
+    seen.last_ns = recv_ns
+    seen.ages_ms.append((recv_ns - stamp_ns) / 1e6)
+
+
+async def publish_strings(pub: Any, count: int | None, seconds: float | None) -> int:
+    """Send as fast as the connection takes them: `count` messages or for `seconds`."""
+    end = None if seconds is None else time.monotonic() + seconds
+    seq = 0
+    while (count is None or seq < count) and (end is None or time.monotonic() < end):
+        await pub.send({"op": "publish", "topic": "/chatter", "msg": string_msg(seq)})
+        seq += 1
+    return seq
+
+
+async def publish_scan_imu(pub: Any, seconds: float) -> dict[str, int]:
+    """2 Hz scans and 50 Hz IMU on one connection for `seconds`."""
+    data = np.random.default_rng(0).random(SCAN_POINTS * 4, dtype=np.float32).tobytes()
+    end = time.monotonic() + seconds
+    sent = {"/lidar": 0, "/imu": 0}
+
+    async def scans() -> None:
+        next_at = time.monotonic()
+        while next_at < end:
+            await pub.send({"op": "publish", "topic": "/lidar", "msg": scan_msg(data)}, big=True)
+            sent["/lidar"] += 1
+            next_at += 0.5
+            await asyncio.sleep(max(0.0, next_at - time.monotonic()))
+
+    async def imus() -> None:
+        next_at = time.monotonic()
+        while next_at < end:
+            await pub.send({"op": "publish", "topic": "/imu", "msg": imu_msg()})
+            sent["/imu"] += 1
+            next_at += 0.02
+            await asyncio.sleep(max(0.0, next_at - time.monotonic()))
+
+    await asyncio.gather(scans(), imus())
+    return sent
+
+
+async def publisher(pipe: Connection, url: str, binary: bool, workload: str, count: int,
+                    seconds: float) -> None:
+    async with await open_client(url, binary) as pub:
+        topics = TOPICS[workload]
+        for topic, type_name in topics:
+            await pub.send({"op": "advertise", "topic": topic, "type": type_name})
+        started = time.monotonic()
+        if workload == "burst":
+            sent = {"/chatter": await publish_strings(pub, count, None)}
+        elif workload == "sustained":
+            sent = {"/chatter": await publish_strings(pub, None, seconds)}
+        else:
+            sent = await publish_scan_imu(pub, seconds)
+        elapsed = time.monotonic() - started
+        await pub.call("/rosapi/get_time")
+        await asyncio.sleep(0.2)
+    pipe.send((sent, elapsed))
+
+
+TOPICS = {
+    "burst": [("/chatter", "std_msgs/msg/String")],
+    "sustained": [("/chatter", "std_msgs/msg/String")],
+    "scan": [("/lidar", "sensor_msgs/msg/PointCloud2"), ("/imu", "sensor_msgs/msg/Imu")],
+}
+
+
+async def open_client(url: str, binary: bool) -> RawClient:
+    return RawClient(url, binary)
+
+
+def run_role(role: str, pipe: Connection, *args: Any) -> None:
+    """Entry point of a spawned process: tuned like every riverbridge process."""
+    from schemas.process_tuning import freeze_startup_heap, tune_process
+    tune_process()
+    freeze_startup_heap()
+    asyncio.run((subscriber if role == "sub" else publisher)(pipe, *args))
+
+
+# -- orchestration -----------------------------------------------------------------------------
+
+def percentile(values: list[float], q: float) -> float:
+    return float(np.percentile(values, q)) if values else float("nan")
+
+
+def one_run(url: str, workload: str, encoding: str, args: argparse.Namespace) -> dict[str, Any]:
+    ctx = mp.get_context("spawn")
+    binary = encoding == "cbor"
+    sub_end, sub_pipe = ctx.Pipe()
+    pub_end, pub_pipe = ctx.Pipe()
+    sub = ctx.Process(target=run_role, args=("sub", sub_pipe, url, binary, TOPICS[workload]))
+    sub.start()
+    if not sub_end.poll(30) or sub_end.recv() != "ready":
+        raise RuntimeError("subscriber did not start")
+    pub = ctx.Process(target=run_role, args=("pub", pub_pipe, url, binary, workload,
+                                             args.count, args.seconds))
+    pub.start()
+    sent, elapsed = pub_end.recv()
+    sub_end.send(sent)
+    seen = sub_end.recv()
+    pub.join(10)
+    sub.join(10)
+    return {"sent": sent, "elapsed_s": elapsed, "seen": seen}
+
+
+def summarize(workload: str, encoding: str, result: dict[str, Any]) -> list[str]:
+    sent, seen = result["sent"], result["seen"]
+    lines = []
+    for topic, n_sent in sent.items():
+        got = seen[topic]
+        ages = got["ages_ms"]
+        if workload == "scan":
+            ages = ages[int(WARMUP_S * (2 if topic == "/lidar" else 50)):]
+        span_s = max(1e-9, (got["last_ns"] - got["first_ns"]) / 1e9)
+        loss = n_sent - got["count"]
+        lines.append(
+            f"  {topic:<9} sent {n_sent:>7,} in {result['elapsed_s']:5.2f} s  delivered "
+            f"{got['count']:>7,} ({got['count'] / span_s:>8,.0f}/s)  loss {loss:>6,} "
+            f"({100 * loss / max(1, n_sent):4.1f} %)  out of order {got['out_of_order']}  "
+            f"age p50 {percentile(ages, 50):7.1f}  p99 {percentile(ages, 99):7.1f}  "
+            f"max {max(ages, default=float('nan')):7.1f} ms")
+    key = workload if workload != "scan" else f"scan-{encoding}"
+    lines.append(f"  reference rosbridge: {REFERENCE[key]}; target: {TARGET[key]}")
+    return lines
+
+
+def start_bridge(extra: list[str]) -> tuple[subprocess.Popen[str], str]:
+    env = {**os.environ, **TUNED_MALLOC}
+    process = subprocess.Popen([sys.executable, "-m", "bridge", "--port", "0",
+                                "--log-level", "warning", *extra], stderr=subprocess.PIPE,
+                               env=env, text=True)
+    assert process.stderr is not None
+    for line in process.stderr:
+        match = re.search(r"listening on (ws://\S+)", line)
+        if match:
+            return process, match.group(1)
+    raise RuntimeError("bridge exited before listening")
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--only", default="burst,sustained,scan",
+                        help="comma-separated workloads (default %(default)s)")
+    parser.add_argument("--encodings", default="json,cbor", help="default %(default)s")
+    parser.add_argument("--count", type=int, default=15_000, help="burst size")
+    parser.add_argument("--seconds", type=float, default=8.0,
+                        help="duration of the sustained and scan workloads")
+    parser.add_argument("--url", help="use a running bridge instead of starting one")
+    parser.add_argument("bridge_args", nargs="*", help="options for `python -m bridge`")
+    args = parser.parse_args(argv)
+    os.environ.update(TUNED_MALLOC)  # the client processes move megabytes too
+    process, url = (None, args.url) if args.url else start_bridge(args.bridge_args)
+    try:
+        print(f"bridge {url} {' '.join(args.bridge_args)}; "
+              f"load average {os.getloadavg()[0]:.2f} (1 min)")
+        for workload in args.only.split(","):
+            for encoding in args.encodings.split(","):
+                result = one_run(url, workload, encoding, args)
+                print(f"{workload} {encoding}  (load {os.getloadavg()[0]:.2f})")
+                print("\n".join(summarize(workload, encoding, result)), flush=True)
+    finally:
+        if process is not None:
+            process.terminate()
+            process.wait(10)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
