@@ -11,7 +11,7 @@ from pathlib import Path
 
 from pydantic import ValidationError
 
-from bridge.config import MIB, BridgeConfig
+from bridge.config import MIB, MIN_SEND_BUFFER, BridgeConfig
 from bridge.server import run_bridge
 from schemas.process_tuning import freeze_startup_heap, tune_process
 
@@ -29,6 +29,13 @@ def positive_float(text: str) -> float:
     value = float(text)
     if not value > 0:
         raise argparse.ArgumentTypeError(f"must be a positive number, got {text}")
+    return value
+
+
+def buffer_bytes(text: str) -> int:
+    value = int(text)
+    if value < MIN_SEND_BUFFER:
+        raise argparse.ArgumentTypeError(f"must be at least {MIN_SEND_BUFFER} bytes, got {text}")
     return value
 
 
@@ -58,9 +65,11 @@ def build_parser() -> argparse.ArgumentParser:
                         help="allow only topics matching this fnmatch pattern (repeatable)")
     parser.add_argument("--services-glob", action="append", default=[], metavar="PATTERN",
                         help="allow only services matching this fnmatch pattern (repeatable)")
-    parser.add_argument("--send-queue", type=positive_int, default=defaults.send_queue,
-                        help="messages of one topic queued per client before its oldest is dropped "
-                             "(default %(default)s)")
+    parser.add_argument("--send-buffer", type=buffer_bytes, default=defaults.send_buffer_bytes,
+                        metavar="BYTES",
+                        help="bytes a client may leave untaken before each of its topics loses "
+                             "its oldest waiting message "
+                             f"(default {defaults.send_buffer_bytes // MIB} MiB)")
     parser.add_argument("--offload-threshold", type=positive_int,
                         default=defaults.offload_threshold_bytes, metavar="BYTES",
                         help="payloads at least this large are decoded and encoded in a worker "
@@ -80,7 +89,7 @@ def config_from_args(args: argparse.Namespace) -> BridgeConfig:
         host=args.host, port=args.port, max_message_size=args.max_message_size,
         fragment_timeout_s=args.fragment_timeout, call_timeout_s=args.call_timeout,
         topics_glob=tuple(args.topics_glob), services_glob=tuple(args.services_glob),
-        send_queue=args.send_queue, interface_dirs=tuple(args.interfaces),
+        send_buffer_bytes=args.send_buffer, interface_dirs=tuple(args.interfaces),
         offload_threshold_bytes=args.offload_threshold,
         web_root=args.web_root,
     )
