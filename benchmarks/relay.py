@@ -17,7 +17,7 @@ that behave like a careful third-party client: big frames are encoded and decode
 thread, in order, so the clients add as little as they can.
 
 Usage: python benchmarks/relay.py [--only burst,sustained,scan] [--encodings json,cbor]
-       [--url ws://host:port] [-- bridge options...]
+       [--url ws://host:port | --bridge-root DIR] [-- bridge options...]
 """
 
 from __future__ import annotations
@@ -27,9 +27,11 @@ import asyncio
 import multiprocessing as mp
 import os
 import re
+import resource
 import subprocess
 import sys
 import time
+from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from multiprocessing.connection import Connection
@@ -139,16 +141,16 @@ class RawClient:
         """A round trip: everything sent before it has been handled by the bridge."""
         await self.send({"op": "call_service", "service": service, "id": "sync"})
 
-    def frames(self) -> asyncio.Queue[tuple[int, Any]]:
-        """A queue of (decoded_ns, op) for every frame; small frames are decoded at once and
-        overtake big ones being decoded on the thread (big frames keep their own order)."""
+    def read(self, handle: Callable[[int, Any], None]) -> None:
+        """Call `handle(decoded_ns, op)` for every frame, from the reading task. Small frames
+        are decoded at once and overtake big ones being decoded on the thread (big frames
+        keep their own order)."""
         from schemas import codec_cbor, codec_json
 
         def decode(data: bytes | str) -> Any:
             return codec_json.loads(data) if isinstance(data, str) else codec_cbor.loads(data)
 
         loop = asyncio.get_running_loop()
-        out: asyncio.Queue[tuple[int, Any]] = asyncio.Queue()
         big: asyncio.Queue[asyncio.Future[Any]] = asyncio.Queue()
 
         async def read() -> None:
@@ -156,15 +158,14 @@ class RawClient:
                 if len(data) >= BIG_FRAME_BYTES:
                     big.put_nowait(loop.run_in_executor(self._decoder, decode, data))
                 else:
-                    out.put_nowait((time.time_ns(), decode(data)))
+                    handle(time.time_ns(), decode(data))
 
         async def finish_big() -> None:
             while True:
                 op = await (await big.get())
-                out.put_nowait((time.time_ns(), op))
+                handle(time.time_ns(), op)
 
         self._tasks = [asyncio.create_task(read()), asyncio.create_task(finish_big())]
-        return out
 
 
 # -- the two roles ---------------------------------------------------------------------------------
@@ -185,40 +186,32 @@ async def subscriber(pipe: Connection, url: str, binary: bool,
                      topics: list[tuple[str, str]]) -> None:
     compression = "cbor" if binary else "none"
     seen: dict[str, Received] = {t: Received() for t, _ in topics}
-    done = asyncio.Event()
-    expected: dict[str, int] = {}
+    subscribed = asyncio.Event()
+    last_frame = [time.monotonic()]
+
+    def handle(recv_ns: int, op: Any) -> None:
+        if op.get("op") == "publish":
+            record(seen[op["topic"]], recv_ns, *sent_ns(op["topic"], op["msg"]))
+            last_frame[0] = time.monotonic()
+        elif op.get("op") == "service_response":
+            subscribed.set()  # the round trip's answer: the subscriptions are in place
+
     async with await open_client(url, binary) as sub:
+        sub.read(handle)
         for topic, type_name in topics:
             await sub.send({"op": "subscribe", "topic": topic, "type": type_name,
                             "compression": compression})
         await sub.call("/rosapi/get_time")
-        frames = sub.frames()
-        while (await frames.get())[1].get("op") != "service_response":
-            pass  # the round trip's answer: the subscriptions are in place
+        await subscribed.wait()
+        started_cpu_s = cpu_s()
         pipe.send("ready")
-
-        async def wait_for_publisher() -> None:
-            expected.update(await asyncio.to_thread(pipe.recv))
-            done.set()
-
-        waiter = asyncio.create_task(wait_for_publisher())
-        last_frame = time.monotonic()
-        while True:
-            try:
-                recv_ns, op = await asyncio.wait_for(frames.get(), 0.5)
-            except TimeoutError:
-                if done.is_set() and (time.monotonic() - last_frame > IDLE_END_S or all(
-                        seen[t].count >= n for t, n in expected.items())):
-                    break
-                continue
-            last_frame = time.monotonic()
-            if op.get("op") != "publish":
-                continue
-            record(seen[op["topic"]], recv_ns, *sent_ns(op["topic"], op["msg"]))
-            if done.is_set() and all(seen[t].count >= n for t, n in expected.items()):
+        expected = await asyncio.to_thread(pipe.recv)
+        while not all(seen[t].count >= n for t, n in expected.items()):
+            if time.monotonic() - last_frame[0] > IDLE_END_S:
                 break
-        waiter.cancel()
-    pipe.send({t: r.__dict__ for t, r in seen.items()})
+            await asyncio.sleep(0.05)
+        used_cpu_s = cpu_s() - started_cpu_s
+    pipe.send(({t: r.__dict__ for t, r in seen.items()}, used_cpu_s))
 
 
 def record(seen: Received, recv_ns: int, seq: int, stamp_ns: int) -> None:
@@ -271,6 +264,7 @@ async def publish_scan_imu(pub: Any, seconds: float) -> dict[str, int]:
 async def publisher(pipe: Connection, url: str, binary: bool, workload: str, count: int,
                     seconds: float) -> None:
     async with await open_client(url, binary) as pub:
+        started_cpu_s = cpu_s()
         topics = TOPICS[workload]
         for topic, type_name in topics:
             await pub.send({"op": "advertise", "topic": topic, "type": type_name})
@@ -284,7 +278,8 @@ async def publisher(pipe: Connection, url: str, binary: bool, workload: str, cou
         elapsed = time.monotonic() - started
         await pub.call("/rosapi/get_time")
         await asyncio.sleep(0.2)
-    pipe.send((sent, elapsed))
+        used_cpu_s = cpu_s() - started_cpu_s
+    pipe.send((sent, elapsed, used_cpu_s))
 
 
 TOPICS = {
@@ -296,6 +291,16 @@ TOPICS = {
 
 async def open_client(url: str, binary: bool) -> RawClient:
     return RawClient(url, binary)
+
+
+def cpu_s(pid: int | None = None) -> float:
+    """CPU seconds (user + system) used by this process, or by process `pid`."""
+    if pid is None:
+        usage = resource.getrusage(resource.RUSAGE_SELF)
+        return usage.ru_utime + usage.ru_stime
+    with open(f"/proc/{pid}/stat") as stat:
+        fields = stat.read().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
 
 
 def run_role(role: str, pipe: Connection, *args: Any) -> None:
@@ -312,7 +317,8 @@ def percentile(values: list[float], q: float) -> float:
     return float(np.percentile(values, q)) if values else float("nan")
 
 
-def one_run(url: str, workload: str, encoding: str, args: argparse.Namespace) -> dict[str, Any]:
+def one_run(url: str, workload: str, encoding: str, args: argparse.Namespace,
+            bridge_pid: int | None) -> dict[str, Any]:
     ctx = mp.get_context("spawn")
     binary = encoding == "cbor"
     sub_end, sub_pipe = ctx.Pipe()
@@ -321,15 +327,18 @@ def one_run(url: str, workload: str, encoding: str, args: argparse.Namespace) ->
     sub.start()
     if not sub_end.poll(30) or sub_end.recv() != "ready":
         raise RuntimeError("subscriber did not start")
+    bridge_cpu = cpu_s(bridge_pid) if bridge_pid else float("nan")
     pub = ctx.Process(target=run_role, args=("pub", pub_pipe, url, binary, workload,
                                              args.count, args.seconds))
     pub.start()
-    sent, elapsed = pub_end.recv()
+    sent, elapsed, pub_cpu = pub_end.recv()
     sub_end.send(sent)
-    seen = sub_end.recv()
+    seen, sub_cpu = sub_end.recv()
+    bridge_cpu = (cpu_s(bridge_pid) if bridge_pid else float("nan")) - bridge_cpu
     pub.join(10)
     sub.join(10)
-    return {"sent": sent, "elapsed_s": elapsed, "seen": seen}
+    return {"sent": sent, "elapsed_s": elapsed, "seen": seen,
+            "cpu_s": {"bridge": bridge_cpu, "publisher": pub_cpu, "subscriber": sub_cpu}}
 
 
 def summarize(workload: str, encoding: str, result: dict[str, Any]) -> list[str]:
@@ -348,16 +357,22 @@ def summarize(workload: str, encoding: str, result: dict[str, Any]) -> list[str]
             f"({100 * loss / max(1, n_sent):4.1f} %)  out of order {got['out_of_order']}  "
             f"age p50 {percentile(ages, 50):7.1f}  p99 {percentile(ages, 99):7.1f}  "
             f"max {max(ages, default=float('nan')):7.1f} ms")
+    cpu = result["cpu_s"]
+    lines.append("  CPU s: " + ", ".join(f"{name} {seconds:.2f}" for name, seconds in cpu.items())
+                 + " (from connected to done)")
     key = workload if workload != "scan" else f"scan-{encoding}"
     lines.append(f"  reference rosbridge: {REFERENCE[key]}; target: {TARGET[key]}")
     return lines
 
 
-def start_bridge(extra: list[str]) -> tuple[subprocess.Popen[str], str]:
+def start_bridge(extra: list[str], root: str | None) -> tuple[subprocess.Popen[str], str]:
     env = {**os.environ, **TUNED_MALLOC}
+    if root is not None:  # another checkout's bridge (e.g. main, for a before/after)
+        root = os.path.abspath(root)
+        env["PYTHONPATH"] = root
     process = subprocess.Popen([sys.executable, "-m", "bridge", "--port", "0",
                                 "--log-level", "warning", *extra], stderr=subprocess.PIPE,
-                               env=env, text=True)
+                               env=env, text=True, cwd=root)
     assert process.stderr is not None
     for line in process.stderr:
         match = re.search(r"listening on (ws://\S+)", line)
@@ -375,16 +390,20 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seconds", type=float, default=8.0,
                         help="duration of the sustained and scan workloads")
     parser.add_argument("--url", help="use a running bridge instead of starting one")
+    parser.add_argument("--bridge-root", metavar="DIR",
+                        help="start the bridge from this checkout (e.g. /work/main) instead")
     parser.add_argument("bridge_args", nargs="*", help="options for `python -m bridge`")
     args = parser.parse_args(argv)
     os.environ.update(TUNED_MALLOC)  # the client processes move megabytes too
-    process, url = (None, args.url) if args.url else start_bridge(args.bridge_args)
+    process, url = (None, args.url) if args.url else start_bridge(args.bridge_args,
+                                                                args.bridge_root)
     try:
-        print(f"bridge {url} {' '.join(args.bridge_args)}; "
+        print(f"bridge {url} {args.bridge_root or ''} {' '.join(args.bridge_args)}; "
               f"load average {os.getloadavg()[0]:.2f} (1 min)")
         for workload in args.only.split(","):
             for encoding in args.encodings.split(","):
-                result = one_run(url, workload, encoding, args)
+                result = one_run(url, workload, encoding, args,
+                                 process.pid if process is not None else None)
                 print(f"{workload} {encoding}  (load {os.getloadavg()[0]:.2f})")
                 print("\n".join(summarize(workload, encoding, result)), flush=True)
     finally:
