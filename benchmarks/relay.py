@@ -13,17 +13,23 @@ on this machine in the issue:
 
 Ages run from just before the publisher encodes (the stamp inside the message) to just after
 the subscriber decoded, on one wall clock. The clients are plain ``websockets`` connections
-that behave like a careful third-party client: big frames are encoded and decoded on a worker
-thread, in order, so the clients add as little as they can.
+that behave like a careful third-party client: big JSON frames are encoded and decoded on a worker
+thread, in order, as riverbridge's own client library does, so the clients add as little as
+they can.
 
 Usage: python benchmarks/relay.py [--only burst,sustained,scan] [--encodings json,cbor]
-       [--url ws://host:port | --bridge-root DIR] [-- bridge options...]
+       [--repeat N] [--compare /work/main] [--floor] [--url ws://host:port]
+       [-- bridge options...]
+With --repeat, --compare (another checkout's bridge) or --floor (a bare websockets relay that
+forwards frames unvalidated), the relays run interleaved and the medians are printed side by
+side with their ratios to this checkout's bridge.
 """
 
 from __future__ import annotations
 
 import argparse
 import asyncio
+import contextlib
 import multiprocessing as mp
 import os
 import re
@@ -42,7 +48,10 @@ import numpy as np
 TUNED_MALLOC = {"MALLOC_MMAP_THRESHOLD_": "268435456", "MALLOC_TRIM_THRESHOLD_": "1073741824",
                 "MALLOC_TOP_PAD_": "67108864"}
 SCAN_POINTS = 345_600  # the thesis' LIDAR (Table 4.3): x, y, z, intensity float32 -> 5.5 MB
-BIG_FRAME_BYTES = 64 * 1024  # frames this large are encoded/decoded on the client's thread
+# Frames from this size on are encoded/decoded on the client's thread, as riverbridge's own
+# client library does (clients.client.OFFLOAD_BYTES): a JSON scan would hold the loop for ~5 ms,
+# a CBOR one costs less than the thread hop.
+BIG_FRAME_BYTES = {False: 256 * 1024, True: 8 * 1024 * 1024}
 STRING_BYTES = 100
 IDLE_END_S = 3.0  # the subscriber stops this long after the last frame once the publisher is done
 WARMUP_S = 1.0  # scan workload: samples stamped in the first second are not counted
@@ -130,7 +139,7 @@ class RawClient:
         return codec_json.dumps(op).decode("ascii")
 
     async def send(self, op: dict[str, Any], big: bool = False) -> None:
-        if big:
+        if big and not self.binary:
             frame = await asyncio.get_running_loop().run_in_executor(self._encoder,
                                                                      self._encode, op)
         else:
@@ -155,7 +164,7 @@ class RawClient:
 
         async def read() -> None:
             async for data in self.ws:
-                if len(data) >= BIG_FRAME_BYTES:
+                if len(data) >= BIG_FRAME_BYTES[self.binary]:
                     big.put_nowait(loop.run_in_executor(self._decoder, decode, data))
                 else:
                     handle(time.time_ns(), decode(data))
@@ -381,6 +390,102 @@ def start_bridge(extra: list[str], root: str | None) -> tuple[subprocess.Popen[s
     raise RuntimeError("bridge exited before listening")
 
 
+async def floor_relay(pipe: Connection) -> None:
+    """The floor: a bare websockets relay that forwards publish frames as they came, without
+    validation or re-encoding, and answers every call (the issue's "40-line relay")."""
+    import cbor2
+    import orjson
+    from websockets.asyncio.server import serve
+    subscribers: dict[str, set[Any]] = {}
+
+    async def relay(ws: Any) -> None:
+        async for data in ws:
+            op = orjson.loads(data) if isinstance(data, str) else cbor2.loads(data)
+            if op["op"] == "publish":
+                for sub in list(subscribers.get(op["topic"], ())):
+                    with contextlib.suppress(Exception):
+                        await sub.send(data)
+            elif op["op"] == "subscribe":
+                subscribers.setdefault(op["topic"], set()).add(ws)
+            elif op["op"] == "call_service":
+                await ws.send(orjson.dumps({"op": "service_response", "id": op.get("id"),
+                                            "service": op["service"], "values": {},
+                                            "result": True}).decode())
+
+    async with serve(relay, "127.0.0.1", 0, compression=None, max_size=None,
+                     write_limit=1024 * 1024) as server:
+        pipe.send(server.sockets[0].getsockname()[1])
+        await asyncio.Future()
+
+
+def run_floor(pipe: Connection) -> None:
+    asyncio.run(floor_relay(pipe))
+
+
+@dataclass
+class Target:
+    """A relay under test: its label, URL and (if we started it) process id."""
+
+    label: str
+    url: str
+    pid: int | None
+    stop: Callable[[], None]
+
+
+def start_targets(args: argparse.Namespace) -> list[Target]:
+    targets = []
+    if args.url:
+        targets.append(Target("given", args.url, None, lambda: None))
+    else:
+        process, url = start_bridge(args.bridge_args, None)
+        targets.append(Target("this", url, process.pid, process.terminate))
+    if args.compare:
+        process, url = start_bridge(args.bridge_args, args.compare)
+        targets.append(Target(os.path.basename(os.path.abspath(args.compare)), url,
+                              process.pid, process.terminate))
+    if args.floor:
+        ctx = mp.get_context("spawn")
+        end, pipe = ctx.Pipe()
+        floor = ctx.Process(target=run_floor, args=(pipe,), daemon=True)
+        floor.start()
+        targets.append(Target("floor", f"ws://127.0.0.1:{end.recv()}", floor.pid,
+                              floor.terminate))
+    return targets
+
+
+def metrics(workload: str, result: dict[str, Any]) -> dict[str, float]:
+    """The figures of one run, flat: delivered/s, loss %, ages per topic; CPU per process."""
+    out: dict[str, float] = {}
+    for topic, n_sent in result["sent"].items():
+        got = result["seen"][topic]
+        ages = got["ages_ms"]
+        if workload == "scan":
+            ages = ages[int(WARMUP_S * (2 if topic == "/lidar" else 50)):]
+        span_s = max(1e-9, (got["last_ns"] - got["first_ns"]) / 1e9)
+        out[f"{topic} delivered/s"] = got["count"] / span_s
+        out[f"{topic} loss %"] = 100 * (n_sent - got["count"]) / max(1, n_sent)
+        for name, q in (("p50", 50), ("p99", 99), ("max", 100)):
+            out[f"{topic} age {name} ms"] = percentile(ages, q)
+    for name, seconds in result["cpu_s"].items():
+        out[f"CPU s {name}"] = seconds
+    return out
+
+
+def median_table(targets: list[Target], runs: dict[str, list[dict[str, float]]]) -> list[str]:
+    """Medians per target, and each target's ratio to the first."""
+    labels = [t.label for t in targets]
+    head = f"  {'median of ' + str(len(runs[labels[0]])) + ' runs':<28}" + "".join(
+        f"{label:>12}" for label in labels) + "".join(
+        f"{label + '/' + labels[0]:>14}" for label in labels[1:])
+    lines = [head]
+    for key in runs[labels[0]][0]:
+        medians = [float(np.median([run[key] for run in runs[label]])) for label in labels]
+        ratios = [m / medians[0] if medians[0] else float("nan") for m in medians[1:]]
+        lines.append(f"  {key:<28}" + "".join(f"{m:>12,.1f}" for m in medians)
+                     + "".join(f"{r:>14.2f}" for r in ratios))
+    return lines
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--only", default="burst,sustained,scan",
@@ -389,28 +494,47 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--count", type=int, default=15_000, help="burst size")
     parser.add_argument("--seconds", type=float, default=8.0,
                         help="duration of the sustained and scan workloads")
+    parser.add_argument("--repeat", type=int, default=1,
+                        help="runs per workload and relay; with more than one, print medians")
     parser.add_argument("--url", help="use a running bridge instead of starting one")
-    parser.add_argument("--bridge-root", metavar="DIR",
-                        help="start the bridge from this checkout (e.g. /work/main) instead")
+    parser.add_argument("--compare", metavar="DIR",
+                        help="also run the bridge of another checkout (e.g. /work/main), "
+                             "interleaved, and print ratios")
+    parser.add_argument("--floor", action="store_true",
+                        help="also run a bare websockets relay (no validation), the floor")
     parser.add_argument("bridge_args", nargs="*", help="options for `python -m bridge`")
     args = parser.parse_args(argv)
     os.environ.update(TUNED_MALLOC)  # the client processes move megabytes too
-    process, url = (None, args.url) if args.url else start_bridge(args.bridge_args,
-                                                                args.bridge_root)
+    targets = start_targets(args)
     try:
-        print(f"bridge {url} {args.bridge_root or ''} {' '.join(args.bridge_args)}; "
-              f"load average {os.getloadavg()[0]:.2f} (1 min)")
+        print(f"relays: {', '.join(f'{t.label} {t.url}' for t in targets)} "
+              f"{' '.join(args.bridge_args)}; load average {os.getloadavg()[0]:.2f} (1 min)")
         for workload in args.only.split(","):
             for encoding in args.encodings.split(","):
-                result = one_run(url, workload, encoding, args,
-                                 process.pid if process is not None else None)
-                print(f"{workload} {encoding}  (load {os.getloadavg()[0]:.2f})")
-                print("\n".join(summarize(workload, encoding, result)), flush=True)
+                run_workload(targets, workload, encoding, args)
     finally:
-        if process is not None:
-            process.terminate()
-            process.wait(10)
+        for target in targets:
+            target.stop()
     return 0
+
+
+def run_workload(targets: list[Target], workload: str, encoding: str,
+                 args: argparse.Namespace) -> None:
+    runs: dict[str, list[dict[str, float]]] = {t.label: [] for t in targets}
+    loads = []
+    for _ in range(args.repeat):
+        for target in targets:
+            result = one_run(target.url, workload, encoding, args, target.pid)
+            loads.append(os.getloadavg()[0])
+            runs[target.label].append(metrics(workload, result))
+            if args.repeat == 1 and len(targets) == 1:
+                print(f"{workload} {encoding}  (load {loads[-1]:.2f})")
+                print("\n".join(summarize(workload, encoding, result)), flush=True)
+                return
+    key = workload if workload != "scan" else f"scan-{encoding}"
+    print(f"{workload} {encoding}  (load {min(loads):.2f}-{max(loads):.2f}); reference "
+          f"rosbridge: {REFERENCE[key]}; target: {TARGET[key]}")
+    print("\n".join(median_table(targets, runs)), flush=True)
 
 
 if __name__ == "__main__":

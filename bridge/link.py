@@ -7,8 +7,9 @@ burst instead of one per message). Only when the socket is backed up (the transp
 than `WRITE_HIGH_WATER` bytes) do messages wait in the client's `SendQueue`, bounded in bytes;
 past the bound each topic loses its oldest waiting message, counted (`bridge.sendqueue`).
 
-Messages whose payload is large are encoded on a worker thread; their topic waits for the encode
-(order per topic), other topics keep flowing past it.
+Large messages whose encode is not just C code holding the GIL are encoded on a worker thread
+(JSON with base64, PNG, CDR); their topic waits for the encode (order per topic), other topics
+keep flowing past it.
 
 Publishers are paced by their subscribers: a link whose backlog exceeds `pause_bytes` asks the
 readers feeding it to stop reading until it drains (TCP backpressure then slows the publisher).
@@ -88,9 +89,8 @@ class ClientLink:
         """Write `send` now or queue it; True if publishers feeding this link should pause."""
         if self.closed:
             return False
-        item = send.item
         if (not len(self.queue) and send.drop_key not in self._busy and self._has_room()
-                and item.size_hint < self._offload_bytes):
+                and not self._needs_worker(send)):
             frames = self._render(send)
             if frames is not None:
                 self._write(send, frames)
@@ -99,9 +99,18 @@ class ClientLink:
         self._service()
         return self.wants_pause()
 
+    def _needs_worker(self, send: Send) -> bool:
+        """Encode on a worker? Only large items whose encode leaves the GIL for part of the
+        time (base64 for JSON, zlib for PNG) or runs in Python (CDR): CBOR's encoder is C code
+        holding the GIL, so a worker would stall the loop as long and add a thread hop."""
+        item = send.item
+        if item.size_hint < self._offload_bytes:
+            return False
+        return not (isinstance(item, Delivery) and item.encoding == CBOR)
+
     def _enqueue(self, send: Send) -> None:
         frames = None
-        if send.item.size_hint < self._offload_bytes:
+        if not self._needs_worker(send):
             frames = self._render(send)  # small: exact size now; the encode is shared anyway
             if frames is None:
                 return
@@ -216,7 +225,7 @@ class ClientLink:
         finally:
             self._drain_task = None
         if not self.closed:
-            self._service()
+            self._service()  # (notes the progress, which wakes paused readers)
 
     def close(self) -> None:
         """The client left: forget what waits and wake anyone waiting for this link."""
@@ -267,6 +276,8 @@ class ClientLink:
         slow (it then drops instead of pacing anyone until it catches up)."""
         mark, since = self._accepted_bytes(), self._loop.time()
         while self.wants_pause():
+            if not self._corked:
+                self._await_drain()  # the transport tells when it is down to its low mark
             self._progress.clear()
             with contextlib.suppress(TimeoutError):
                 async with asyncio.timeout(POLL_S):
