@@ -4,7 +4,7 @@ A message for a client whose socket has room and nothing waiting is framed and h
 transport at once, in the same loop turn that produced it: no queue, no task switch. Frames
 written in one turn leave in one `transport.write` when the turn ends (one system call for a
 burst instead of one per message). Only when the socket is backed up (the transport holds more
-than `WRITE_HIGH_WATER` bytes) do messages wait in the client's `SendQueue`, bounded in bytes;
+than `room_bytes`, 1 MiB by default) do messages wait in the client's `SendQueue`, bounded in bytes;
 past the bound each topic loses its oldest waiting message, counted (`bridge.sendqueue`).
 
 Large messages whose encode is not just C code holding the GIL are encoded on a worker thread
@@ -36,7 +36,8 @@ from bridge.sendqueue import SendQueue, Waiting
 logger = logging.getLogger("bridge.server")
 
 # Bytes the transport may hold for a client before messages wait in its queue instead: a few
-# hundred small frames, or one slice of a scan (the transport's own high-water mark too).
+# thousand small frames, or one slice of a scan (the transport's own high-water mark too; less
+# when the client's bound is small).
 WRITE_HIGH_WATER = 1024 * 1024
 # Writes of at least this size are handed to the transport on their own, not joined.
 JOIN_LIMIT = 64 * 1024
@@ -64,7 +65,10 @@ class ClientLink:
         self.client_id = client_id
         self.ws = ws
         self.queue = SendQueue(limit_bytes)
-        self.pause_bytes = max(WRITE_HIGH_WATER, limit_bytes // 8)
+        # What the transport may hold before messages queue (a quarter of a small bound), and
+        # the backlog from which publishers feeding this link wait for it.
+        self.room_bytes = min(WRITE_HIGH_WATER, limit_bytes // 4)
+        self.pause_bytes = max(self.room_bytes, limit_bytes // 8)
         self.frames_sent = 0
         self.closed = False
         self._loop = asyncio.get_running_loop()
@@ -72,6 +76,7 @@ class ClientLink:
         self._offload_bytes = offload_bytes
         self._delivered = delivered
         self._transport = ws.transport
+        self._transport.set_write_buffer_limits(high=self.room_bytes)  # drain() wakes at 1/4
         self._protocol = ws.protocol
         self._busy: set[str | None] = set()  # streams with a message being encoded
         self._corked = 0  # bytes framed this turn, not yet handed to the transport
@@ -241,7 +246,7 @@ class ClientLink:
         return self._transport.get_write_buffer_size() + self._corked
 
     def _has_room(self) -> bool:
-        return self._outside_bytes() <= WRITE_HIGH_WATER
+        return self._outside_bytes() <= self.room_bytes
 
     def backlog_bytes(self) -> int:
         """Bytes this client has not taken yet: in the transport, framed, or queued."""
