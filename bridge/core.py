@@ -25,7 +25,7 @@ from bridge.session import ClientSession
 from bridge.sinks import MessageSink
 from schemas.errors import SchemaError
 from schemas.message import normalize
-from schemas.ops import OpError, parse_op
+from schemas.ops import OpError, parse_op, parse_publish
 from schemas.registry import TypeRegistry
 from schemas.specs import MessageSpec
 from schemas.tracing import cdr_size, header_stamp_ns
@@ -176,7 +176,7 @@ class BridgeCore:
             return
         handler = OP_HANDLERS[op_name]
         try:
-            op = parse_op(message)
+            op = parse_publish(message) if op_name == "publish" else parse_op(message)
         except OpError as exc:
             answer_failed_request(ctx, session, message, f"malformed op: {exc}")
             return

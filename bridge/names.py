@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 from fnmatch import fnmatchcase
+from functools import lru_cache
 
 from bridge.errors import InvalidNameError
 
 
+@lru_cache(maxsize=4096)  # pure; every publish resolves its topic name
 def absolute_name(name: str) -> str:
     """Resolve `name` against the bridge's namespace `/` (`rosapi/topics` -> `/rosapi/topics`)."""
     stripped = name.strip()
