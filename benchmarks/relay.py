@@ -9,7 +9,9 @@ on this machine in the issue:
 2. sustained: the same messages for ``--seconds``, delivered/s and loss;
 3. scan + IMU: a full 345,600-point ``sensor_msgs/PointCloud2`` (5.5 MB) at 2 Hz and a 50 Hz
    ``sensor_msgs/Imu`` on the same publisher connection and the same subscriber connection:
-   scan age p50/p99/max and IMU age p99/max.
+   scan age p50/p99/max and IMU age p99/max;
+4. scan2 (only when asked for): the same with the scan and the IMU each on a connection of its
+   own, in the publisher and in the subscriber: does a second connection still help?
 
 Ages run from just before the publisher encodes (the stamp inside the message) to just after
 the subscriber decoded, on one wall clock. The clients are plain ``websockets`` connections
@@ -62,12 +64,15 @@ REFERENCE = {
     "sustained": "3,300-3,600 msg/s",
     "scan-cbor": "does not accept CBOR publishes",
     "scan-json": "scan p50 1,595 ms, IMU p99 546 ms",
+    "scan2-cbor": "-", "scan2-json": "-",
 }
 TARGET = {
     "burst": "all 15,000 delivered",
     "sustained": ">= 20,000 msg/s, lossless",
     "scan-cbor": "scan p50 <= 12 ms, IMU p99 <= 5 ms",
     "scan-json": "scan p50 <= 45 ms, IMU p99 <= 5 ms",
+    "scan2-cbor": "two connections each: does a second one still help?",
+    "scan2-json": "two connections each: does a second one still help?",
 }
 
 
@@ -191,11 +196,17 @@ class Received:
     ages_ms: list[float] = field(default_factory=list)
 
 
-async def subscriber(pipe: Connection, url: str, binary: bool,
-                     topics: list[tuple[str, str]]) -> None:
+def connection_groups(workload: str) -> list[list[tuple[str, str]]]:
+    """The topics of each connection a client opens: one, or (scan2) the scan and the IMU
+    on connections of their own."""
+    topics = TOPICS[workload]
+    return [[topic] for topic in topics] if workload == "scan2" else [topics]
+
+
+async def subscriber(pipe: Connection, url: str, binary: bool, workload: str) -> None:
     compression = "cbor" if binary else "none"
-    seen: dict[str, Received] = {t: Received() for t, _ in topics}
-    subscribed = asyncio.Event()
+    seen: dict[str, Received] = {t: Received() for t, _ in TOPICS[workload]}
+    subscribed = asyncio.Semaphore(0)
     last_frame = [time.monotonic()]
 
     def handle(recv_ns: int, op: Any) -> None:
@@ -203,15 +214,17 @@ async def subscriber(pipe: Connection, url: str, binary: bool,
             record(seen[op["topic"]], recv_ns, *sent_ns(op["topic"], op["msg"]))
             last_frame[0] = time.monotonic()
         elif op.get("op") == "service_response":
-            subscribed.set()  # the round trip's answer: the subscriptions are in place
+            subscribed.release()  # the round trip's answer: the subscriptions are in place
 
-    async with await open_client(url, binary) as sub:
-        sub.read(handle)
-        for topic, type_name in topics:
-            await sub.send({"op": "subscribe", "topic": topic, "type": type_name,
-                            "compression": compression})
-        await sub.call("/rosapi/get_time")
-        await subscribed.wait()
+    async with contextlib.AsyncExitStack() as stack:
+        for group in connection_groups(workload):
+            sub = await stack.enter_async_context(RawClient(url, binary))
+            sub.read(handle)
+            for topic, type_name in group:
+                await sub.send({"op": "subscribe", "topic": topic, "type": type_name,
+                                "compression": compression})
+            await sub.call("/rosapi/get_time")
+            await subscribed.acquire()
         started_cpu_s = cpu_s()
         pipe.send("ready")
         expected = await asyncio.to_thread(pipe.recv)
@@ -244,8 +257,8 @@ async def publish_strings(pub: Any, count: int | None, seconds: float | None) ->
     return seq
 
 
-async def publish_scan_imu(pub: Any, seconds: float) -> dict[str, int]:
-    """2 Hz scans and 50 Hz IMU on one connection for `seconds`."""
+async def publish_scan_imu(pub: Any, imu_pub: Any, seconds: float) -> dict[str, int]:
+    """2 Hz scans on `pub` and 50 Hz IMU on `imu_pub` (the same connection, or not)."""
     data = np.random.default_rng(0).random(SCAN_POINTS * 4, dtype=np.float32).tobytes()
     end = time.monotonic() + seconds
     sent = {"/lidar": 0, "/imu": 0}
@@ -261,7 +274,7 @@ async def publish_scan_imu(pub: Any, seconds: float) -> dict[str, int]:
     async def imus() -> None:
         next_at = time.monotonic()
         while next_at < end:
-            await pub.send({"op": "publish", "topic": "/imu", "msg": imu_msg()})
+            await imu_pub.send({"op": "publish", "topic": "/imu", "msg": imu_msg()})
             sent["/imu"] += 1
             next_at += 0.02
             await asyncio.sleep(max(0.0, next_at - time.monotonic()))
@@ -272,20 +285,24 @@ async def publish_scan_imu(pub: Any, seconds: float) -> dict[str, int]:
 
 async def publisher(pipe: Connection, url: str, binary: bool, workload: str, count: int,
                     seconds: float) -> None:
-    async with await open_client(url, binary) as pub:
+    async with contextlib.AsyncExitStack() as stack:
+        pubs = []
+        for group in connection_groups(workload):
+            pub = await stack.enter_async_context(RawClient(url, binary))
+            for topic, type_name in group:
+                await pub.send({"op": "advertise", "topic": topic, "type": type_name})
+            pubs.append(pub)
         started_cpu_s = cpu_s()
-        topics = TOPICS[workload]
-        for topic, type_name in topics:
-            await pub.send({"op": "advertise", "topic": topic, "type": type_name})
         started = time.monotonic()
         if workload == "burst":
-            sent = {"/chatter": await publish_strings(pub, count, None)}
+            sent = {"/chatter": await publish_strings(pubs[0], count, None)}
         elif workload == "sustained":
-            sent = {"/chatter": await publish_strings(pub, None, seconds)}
+            sent = {"/chatter": await publish_strings(pubs[0], None, seconds)}
         else:
-            sent = await publish_scan_imu(pub, seconds)
+            sent = await publish_scan_imu(pubs[0], pubs[-1], seconds)
         elapsed = time.monotonic() - started
-        await pub.call("/rosapi/get_time")
+        for pub in pubs:
+            await pub.call("/rosapi/get_time")
         await asyncio.sleep(0.2)
         used_cpu_s = cpu_s() - started_cpu_s
     pipe.send((sent, elapsed, used_cpu_s))
@@ -295,11 +312,8 @@ TOPICS = {
     "burst": [("/chatter", "std_msgs/msg/String")],
     "sustained": [("/chatter", "std_msgs/msg/String")],
     "scan": [("/lidar", "sensor_msgs/msg/PointCloud2"), ("/imu", "sensor_msgs/msg/Imu")],
+    "scan2": [("/lidar", "sensor_msgs/msg/PointCloud2"), ("/imu", "sensor_msgs/msg/Imu")],
 }
-
-
-async def open_client(url: str, binary: bool) -> RawClient:
-    return RawClient(url, binary)
 
 
 def cpu_s(pid: int | None = None) -> float:
@@ -332,7 +346,7 @@ def one_run(url: str, workload: str, encoding: str, args: argparse.Namespace,
     binary = encoding == "cbor"
     sub_end, sub_pipe = ctx.Pipe()
     pub_end, pub_pipe = ctx.Pipe()
-    sub = ctx.Process(target=run_role, args=("sub", sub_pipe, url, binary, TOPICS[workload]))
+    sub = ctx.Process(target=run_role, args=("sub", sub_pipe, url, binary, workload))
     sub.start()
     if not sub_end.poll(30) or sub_end.recv() != "ready":
         raise RuntimeError("subscriber did not start")
@@ -356,7 +370,7 @@ def summarize(workload: str, encoding: str, result: dict[str, Any]) -> list[str]
     for topic, n_sent in sent.items():
         got = seen[topic]
         ages = got["ages_ms"]
-        if workload == "scan":
+        if workload.startswith("scan"):
             ages = ages[int(WARMUP_S * (2 if topic == "/lidar" else 50)):]
         span_s = max(1e-9, (got["last_ns"] - got["first_ns"]) / 1e9)
         loss = n_sent - got["count"]
@@ -369,7 +383,7 @@ def summarize(workload: str, encoding: str, result: dict[str, Any]) -> list[str]
     cpu = result["cpu_s"]
     lines.append("  CPU s: " + ", ".join(f"{name} {seconds:.2f}" for name, seconds in cpu.items())
                  + " (from connected to done)")
-    key = workload if workload != "scan" else f"scan-{encoding}"
+    key = workload if not workload.startswith("scan") else f"{workload}-{encoding}"
     lines.append(f"  reference rosbridge: {REFERENCE[key]}; target: {TARGET[key]}")
     return lines
 
@@ -459,7 +473,7 @@ def metrics(workload: str, result: dict[str, Any]) -> dict[str, float]:
     for topic, n_sent in result["sent"].items():
         got = result["seen"][topic]
         ages = got["ages_ms"]
-        if workload == "scan":
+        if workload.startswith("scan"):
             ages = ages[int(WARMUP_S * (2 if topic == "/lidar" else 50)):]
         span_s = max(1e-9, (got["last_ns"] - got["first_ns"]) / 1e9)
         out[f"{topic} delivered/s"] = got["count"] / span_s
@@ -496,6 +510,9 @@ def main(argv: list[str] | None = None) -> int:
                         help="duration of the sustained and scan workloads")
     parser.add_argument("--repeat", type=int, default=1,
                         help="runs per workload and relay; with more than one, print medians")
+    parser.add_argument("--interleave", action="store_true",
+                        help="with --repeat: run every workload once per round (for comparing "
+                             "workloads, e.g. scan against scan2, under the same load)")
     parser.add_argument("--url", help="use a running bridge instead of starting one")
     parser.add_argument("--compare", metavar="DIR",
                         help="also run the bridge of another checkout (e.g. /work/main), "
@@ -509,32 +526,54 @@ def main(argv: list[str] | None = None) -> int:
     try:
         print(f"relays: {', '.join(f'{t.label} {t.url}' for t in targets)} "
               f"{' '.join(args.bridge_args)}; load average {os.getloadavg()[0]:.2f} (1 min)")
-        for workload in args.only.split(","):
-            for encoding in args.encodings.split(","):
-                run_workload(targets, workload, encoding, args)
+        cases = [(w, e) for w in args.only.split(",") for e in args.encodings.split(",")]
+        if args.interleave:  # every case once per round, so a change of load hits them all
+            runs = {case: new_runs(targets) for case in cases}
+            for _ in range(args.repeat):
+                for case in cases:
+                    run_case(targets, *case, args, runs[case])
+            for case in cases:
+                print_case(targets, *case, runs[case])
+        else:
+            for case in cases:
+                runs = new_runs(targets)
+                for _ in range(args.repeat):
+                    run_case(targets, *case, args, runs)
+                print_case(targets, *case, runs)
     finally:
         for target in targets:
             target.stop()
     return 0
 
 
-def run_workload(targets: list[Target], workload: str, encoding: str,
-                 args: argparse.Namespace) -> None:
-    runs: dict[str, list[dict[str, float]]] = {t.label: [] for t in targets}
-    loads = []
-    for _ in range(args.repeat):
-        for target in targets:
-            result = one_run(target.url, workload, encoding, args, target.pid)
-            loads.append(os.getloadavg()[0])
-            runs[target.label].append(metrics(workload, result))
-            if args.repeat == 1 and len(targets) == 1:
-                print(f"{workload} {encoding}  (load {loads[-1]:.2f})")
-                print("\n".join(summarize(workload, encoding, result)), flush=True)
-                return
-    key = workload if workload != "scan" else f"scan-{encoding}"
+Runs = dict[str, Any]  # per target label: list of metrics dicts, and "loads"
+
+
+def new_runs(targets: list[Target]) -> Runs:
+    return {"loads": [], **{t.label: [] for t in targets}}
+
+
+def run_case(targets: list[Target], workload: str, encoding: str, args: argparse.Namespace,
+             runs: Runs) -> None:
+    """One run of the case on every target (in turn), appended to `runs`."""
+    for target in targets:
+        result = one_run(target.url, workload, encoding, args, target.pid)
+        runs["loads"].append(os.getloadavg()[0])
+        runs[target.label].append(metrics(workload, result))
+        runs.setdefault("last", result)
+
+
+def print_case(targets: list[Target], workload: str, encoding: str, runs: Runs) -> None:
+    loads = runs["loads"]
+    if len(loads) == 1:
+        print(f"{workload} {encoding}  (load {loads[0]:.2f})")
+        print("\n".join(summarize(workload, encoding, runs["last"])), flush=True)
+        return
+    key = workload if not workload.startswith("scan") else f"{workload}-{encoding}"
     print(f"{workload} {encoding}  (load {min(loads):.2f}-{max(loads):.2f}); reference "
           f"rosbridge: {REFERENCE[key]}; target: {TARGET[key]}")
-    print("\n".join(median_table(targets, runs)), flush=True)
+    print("\n".join(median_table(targets, {t.label: runs[t.label] for t in targets})),
+          flush=True)
 
 
 if __name__ == "__main__":
