@@ -110,16 +110,20 @@ class Intake:
 
     def _start_worker(self, key: str | None, message: Any, arrived_ns: int,
                       wire_bytes: int) -> None:
+        try:
+            future = asyncio.get_running_loop().run_in_executor(
+                self._pool, self._core.prepare_decoded, message, wire_bytes, time.time_ns())
+        except RuntimeError:  # the pool has shut down: the server is stopping
+            self.closed = True
+            return
         entry = Entry(key, arrived_ns, wire_bytes)
         self._waiting.append(entry)
         self.pending_bytes += wire_bytes
-        future = asyncio.get_running_loop().run_in_executor(
-            self._pool, self._core.prepare_decoded, message, wire_bytes, time.time_ns())
         future.add_done_callback(lambda done: self._prepared(entry, done))
 
     def _prepared(self, entry: Entry, done: asyncio.Future[Any]) -> None:
-        if done.cancelled():
-            entry.problem = "decode cancelled"
+        if done.cancelled():  # the server is stopping
+            self.closed = True
         elif (exc := done.exception()) is not None:
             entry.problem = str(exc) if isinstance(exc, SchemaError) else repr(exc)
         else:

@@ -151,8 +151,11 @@ class ClientLink:
 
     def _start_render(self, waiting: Waiting) -> None:
         key = waiting.send.drop_key
+        try:
+            future = self._loop.run_in_executor(self._pool, self._render, waiting.send)
+        except RuntimeError:  # the pool has shut down: the server is stopping
+            return
         self._busy.add(key)
-        future = self._loop.run_in_executor(self._pool, self._render, waiting.send)
 
         def rendered(done: asyncio.Future[list[WireFrame] | None]) -> None:
             self._busy.discard(key)
