@@ -11,8 +11,10 @@ Large messages whose encode is not just C code holding the GIL are encoded on a 
 (JSON with base64, PNG, CDR); their topic waits for the encode (order per topic), other topics
 keep flowing past it.
 
-Publishers are paced by their subscribers: a link whose backlog exceeds `pause_bytes` asks the
-readers feeding it to stop reading until it drains (TCP backpressure then slows the publisher).
+Publishers are paced by their subscribers: a link whose queue holds more than `pause_bytes` asks
+the readers feeding it to stop reading until it drains (TCP backpressure then slows the
+publisher). Only the queue counts: one big message in the socket's buffer (a scan the client
+is still reading) is no reason to hold up the publisher's next frames.
 A link that makes no progress for `STALL_S`, or stays backed up longer than `SLOW_S`, is a slow
 reader: nobody waits for it any more until it has caught up, and it drops instead.
 """
@@ -66,9 +68,9 @@ class ClientLink:
         self.ws = ws
         self.queue = SendQueue(limit_bytes)
         # What the transport may hold before messages queue (a quarter of a small bound), and
-        # the backlog from which publishers feeding this link wait for it.
+        # the queue from which publishers feeding this link wait for it (1 MiB by default).
         self.room_bytes = min(WRITE_HIGH_WATER, limit_bytes // 4)
-        self.pause_bytes = max(self.room_bytes, limit_bytes // 8)
+        self.pause_bytes = limit_bytes // 16
         self.frames_sent = 0
         self.closed = False
         self._loop = asyncio.get_running_loop()
@@ -261,7 +263,7 @@ class ClientLink:
 
     def _note_progress(self) -> None:
         self._progress.set()
-        if self.backlog_bytes() <= self.pause_bytes:
+        if self.queue.bytes <= self.pause_bytes:
             self._backed_up_since = None
             self._stalled = False
 
@@ -272,7 +274,7 @@ class ClientLink:
 
     def wants_pause(self) -> bool:
         """Should readers feeding this link wait for it before reading on?"""
-        if self.gone or self._stalled or self.backlog_bytes() <= self.pause_bytes:
+        if self.gone or self._stalled or self.queue.bytes <= self.pause_bytes:
             return False
         now = self._loop.time()
         if self._backed_up_since is None:
@@ -280,7 +282,7 @@ class ClientLink:
         return now - self._backed_up_since < SLOW_S
 
     async def drained(self) -> None:
-        """Return once the backlog is under `pause_bytes`, or the link has proved stalled or
+        """Return once the queue is under `pause_bytes`, or the link has proved stalled or
         slow (it then drops instead of pacing anyone until it catches up)."""
         mark, since = self._accepted_bytes(), self._loop.time()
         while self.wants_pause():
