@@ -81,6 +81,7 @@ class ClientLink:
         self._transport.set_write_buffer_limits(high=self.room_bytes)  # drain() wakes at 1/4
         self._protocol = ws.protocol
         self._busy: set[str | None] = set()  # streams with a message being encoded
+        self._fragment_seq = 0  # numbers fragment ids of messages that have no id of their own
         self._corked = 0  # bytes framed this turn, not yet handed to the transport
         self._handed = 0  # bytes handed to the transport since the start
         self._flush_pending = False
@@ -143,9 +144,13 @@ class ClientLink:
             self._await_drain()
         self._note_progress()
 
-    def _render(self, send: Send) -> list[WireFrame] | None:
+    def _render(self, send: Send, fallback_id: str | None = None) -> list[WireFrame] | None:
+        """The frames of `send`; `fallback_id` names the fragments of a message without an id
+        (taken on the loop, so that renders on the worker number them uniquely too)."""
+        if fallback_id is None:
+            fallback_id = self._next_fragment_id()
         try:
-            return render(send.item, send.fragment_size, f"fragment:{self.frames_sent}")
+            return render(send.item, send.fragment_size, fallback_id)
         except Exception:  # one unencodable message must not cost the client anything else
             logger.exception("client %d: cannot encode a message for %s", self.client_id,
                              send.drop_key or "a reply")
@@ -154,7 +159,8 @@ class ClientLink:
     def _start_render(self, waiting: Waiting) -> None:
         key = waiting.send.drop_key
         try:
-            future = self._loop.run_in_executor(self._pool, self._render, waiting.send)
+            future = self._loop.run_in_executor(self._pool, self._render, waiting.send,
+                                                self._next_fragment_id())
         except RuntimeError:  # the pool has shut down: the server is stopping
             return
         self._busy.add(key)
@@ -170,6 +176,10 @@ class ClientLink:
             self._service()
 
         future.add_done_callback(rendered)
+
+    def _next_fragment_id(self) -> str:
+        self._fragment_seq += 1
+        return f"fragment:{self._fragment_seq}"
 
     def _write(self, send: Send, frames: list[WireFrame]) -> None:
         """Frame `frames` into the websocket; the bytes leave when this loop turn ends."""

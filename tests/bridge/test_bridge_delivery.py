@@ -147,3 +147,32 @@ async def test_order_per_topic_holds_and_other_topics_overtake_a_big_frame(bridg
     assert order.index(("/small", "0")) < order.index(("/big", 3_000))  # overtaken
     assert [o for o in order if o[0] == "/small"] == [("/small", str(n)) for n in range(3)]
     assert [o for o in order if o[0] == "/big"] == [("/big", 3_000), ("/big", 0)]  # in order
+
+
+async def next_reassembled(ws, pieces: dict[str, dict[int, str]]) -> dict:
+    """Read `fragment` ops until one message is complete; return it."""
+    while True:
+        fragment = json.loads(await asyncio.wait_for(ws.recv(), 10))
+        assert fragment["op"] == "fragment"
+        got = pieces.setdefault(fragment["id"], {})
+        assert fragment["num"] not in got  # an id is never reused while incomplete
+        got[fragment["num"]] = fragment["data"]
+        if len(got) == fragment["total"]:
+            return json.loads("".join(got[n] for n in range(fragment["total"])))
+
+
+async def test_back_to_back_messages_are_fragmented_under_distinct_ids(bridge):
+    async with (websockets.connect(bridge.url) as pub,
+                websockets.connect(bridge.url) as sub):
+        await sub.send(json.dumps({"op": "subscribe", "topic": "/chatter",
+                                   "type": "std_msgs/msg/String", "fragment_size": 40}))
+        await sub.send(json.dumps({"op": "call_service", "service": "/rosapi/get_time"}))
+        pieces: dict[str, dict[int, str]] = {}
+        assert (await next_reassembled(sub, pieces))["op"] == "service_response"
+        texts = [f"{n} " + "y" * 150 for n in range(3)]
+        for text in texts:
+            await pub.send(json.dumps({"op": "publish", "topic": "/chatter",
+                                       "msg": {"data": text}}))
+        got = [await next_reassembled(sub, pieces) for _ in texts]
+    assert [m["msg"]["data"] for m in got] == texts
+    assert len(pieces) == 4
