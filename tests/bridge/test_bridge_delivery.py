@@ -123,6 +123,28 @@ async def test_a_client_that_stops_reading_loses_its_oldest_counted_and_nobody_e
         await stalled.close()
 
 
+async def test_a_slow_reader_paces_the_publisher_and_loses_nothing(registry):
+    """5 MB through a 256 KiB bound to a subscriber that reads at most 10,000 msg/s: the
+    publisher is slowed (TCP), the subscriber gets everything."""
+    count = 5_000
+    async with (run_bridge(BridgeConfig(port=0, send_buffer_bytes=256 * 1024), registry)
+                as bridge, websockets.connect(bridge.url) as pub):
+        slow = await stalled_subscriber(bridge.url, "/chatter")
+
+        async def read_slowly() -> list[int]:
+            seqs: list[int] = []
+            while len(seqs) < count:
+                seqs += [seq_of(m) for m in await read_publishes(slow, 10)]
+                await asyncio.sleep(0.001)
+            return seqs
+
+        reading = asyncio.create_task(read_slowly())
+        await publish_numbered(pub, count, pad=1000)
+        assert await reading == list(range(count))
+        assert not any(client["dropped"] for client in bridge.server.stats().values())
+        await slow.close()
+
+
 async def test_order_per_topic_holds_and_other_topics_overtake_a_big_frame(bridge):
     """A MarkerArray of 3,000 markers takes the worker tens of ms to validate (and, for the
     JSON subscriber, to encode): small frames sent after it on the same connection overtake it
