@@ -30,8 +30,8 @@ Measured here (2 cores shared with other work; `--compare /work/main --floor --r
 1.2-3.4; medians of 3 interleaved runs; main = the bridge before issue 11):
 
     workload                 this bridge             main (before)           bare relay (floor)
-    burst JSON delivered     15,000, 29,400/s        252 (98.3 % lost)       15,000, 24,600/s
-    burst CBOR delivered     15,000, 20,800/s        222 (98.5 % lost)       15,000, 9,800/s
+    burst JSON delivered     15,000, 29,400/s        ~255 (98.3 % lost)      15,000, 24,600/s
+    burst CBOR delivered     15,000, 20,800/s        ~225 (98.5 % lost)      15,000, 9,800/s
     sustained JSON           26,600 msg/s, lossless  320 msg/s (99 % lost)   10,100 msg/s
     sustained CBOR           28,000 msg/s, lossless  350 msg/s (99 % lost)   6,200 msg/s
     scan+IMU JSON            scan p50 35.1 ms,       39.5 ms, 22.0 ms        30.1 ms, 9.3 ms
