@@ -289,7 +289,16 @@ class ClientLink:
         now = self._loop.time()
         if self._backed_up_since is None:
             self._backed_up_since = now
-        return now - self._backed_up_since < SLOW_S
+        elif now - self._backed_up_since >= SLOW_S:
+            self._give_up(f"has been backed up for {SLOW_S:g} s")
+            return False
+        return True
+
+    def _give_up(self, why: str) -> None:
+        """Stop pacing publishers for this link until it has caught up; it drops instead."""
+        self._stalled = True
+        logger.info("client %d %s: publishers no longer wait for it; past %d bytes it loses "
+                    "its oldest messages per topic", self.client_id, why, self.queue.limit_bytes)
 
     async def drained(self) -> None:
         """Return once the queue is under `pause_bytes`, or the link has proved stalled or
@@ -306,9 +315,7 @@ class ClientLink:
             if accepted != mark:
                 mark, since = accepted, self._loop.time()
             elif self._loop.time() - since > STALL_S:
-                self._stalled = True
-                logger.info("client %d stopped reading; its oldest messages go past %d bytes",
-                            self.client_id, self.queue.limit_bytes)
+                self._give_up(f"took no byte for {STALL_S:g} s")
 
     async def answers_taken(self, limit: int) -> None:
         """Return once at most `limit` undroppable items wait (or the link closed)."""
