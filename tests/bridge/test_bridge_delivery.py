@@ -124,18 +124,22 @@ async def test_a_client_that_stops_reading_loses_its_oldest_counted_and_nobody_e
 
 
 async def test_a_slow_reader_paces_the_publisher_and_loses_nothing(registry):
-    """2 MB through a 256 KiB bound to a subscriber that reads at most 10,000 msg/s: the
-    publisher is slowed (TCP), the subscriber gets everything (within the 2 s a subscriber may
-    stay backed up before it counts as slow, even on a busy machine)."""
+    """2 MB through a 256 KiB bound and small socket buffers to a subscriber that reads at most
+    10,000 msg/s: the publisher is slowed (TCP), the subscriber gets everything (well within
+    the 2 s a subscriber may stay backed up before it counts as slow, even on a busy
+    machine)."""
     count = 2_000
     async with (run_bridge(BridgeConfig(port=0, send_buffer_bytes=256 * 1024), registry)
                 as bridge, websockets.connect(bridge.url) as pub):
         slow = await stalled_subscriber(bridge.url, "/chatter")
+        for link in bridge.server.links.values():  # a thin pipe: the kernel buffers little
+            link.ws.transport.get_extra_info("socket").setsockopt(
+                socket.SOL_SOCKET, socket.SO_SNDBUF, 4096)
 
         async def read_slowly() -> list[int]:
             seqs: list[int] = []
             while len(seqs) < count:
-                seqs += [seq_of(m) for m in await read_publishes(slow, 10)]
+                seqs += [seq_of(m) for m in await read_publishes(slow, 10, timeout=10)]
                 await asyncio.sleep(0.001)
             return seqs
 
