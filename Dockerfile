@@ -1,28 +1,66 @@
-# One image for the three riverbridge services (bridge, simulator, navigation); see
-# docker-compose.yml. Every dependency ships manylinux wheels (numpy, Embree via embreex,
-# OpenCV headless, scikit-learn), so the slim image needs no compiler and no X libraries.
-FROM python:3.11-slim
+# One image for the three riverbridge services (bridge, simulator, navigation) and the web
+# dashboard the bridge serves; see docker-compose.yml. Every Python dependency ships manylinux
+# wheels (numpy, Embree via embreex, OpenCV headless, scikit-learn), so no compiler is needed.
+#
+# Both bases are arguments, so the image also builds where no image registry is reachable
+# (tests/launcher/test_compose_engine.py builds them from Debian's packages):
+#   BASE_IMAGE  a Debian-like image with python3 (>= 3.11) and its venv module
+#   NODE_IMAGE  an image with Node.js >= 20.19 and npm, for the dashboard build only
+# Network settings the build needs (a package index, an npm registry, a CA bundle) go into
+# docker/build-config/ (see the README there): only the build stages read them, the final
+# image has none of them.
+ARG BASE_IMAGE=python:3.11-slim
+ARG NODE_IMAGE=node:22-bookworm-slim
+
+# -- the dashboard: web/ built with npm into /web/dist ---------------------------------------
+FROM ${NODE_IMAGE} AS dashboard
+WORKDIR /web
+COPY docker/build-config/ /build-config/
+COPY web/package.json web/package-lock.json ./
+RUN if [ -f /build-config/npmrc ]; then export NPM_CONFIG_USERCONFIG=/build-config/npmrc; fi; \
+    if [ -f /build-config/ca-certificates.crt ]; then \
+        export NODE_EXTRA_CA_CERTS=/build-config/ca-certificates.crt; fi; \
+    npm ci --no-audit --no-fund --loglevel=error
+COPY web/ ./
+RUN npm run build
+
+# -- the Python package in a virtual environment at /opt/riverbridge -------------------------
+FROM ${BASE_IMAGE} AS install
+ENV PIP_NO_CACHE_DIR=1 \
+    PIP_DISABLE_PIP_VERSION_CHECK=1
+COPY docker/build-config/ /build-config/
+RUN python3 -m venv /opt/riverbridge
+WORKDIR /build
+# The dependencies first, in their own layer: it is rebuilt only when pyproject.toml changes.
+COPY pyproject.toml ./
+RUN if [ -f /build-config/pip.conf ]; then export PIP_CONFIG_FILE=/build-config/pip.conf; fi; \
+    python3 -c "import tomllib; print('\n'.join(tomllib.load(open('pyproject.toml', 'rb'))['project']['dependencies']))" > requirements.txt \
+    && /opt/riverbridge/bin/pip install --quiet -r requirements.txt
+COPY README.md riverbridge.py ./
+COPY schemas ./schemas
+COPY bridge ./bridge
+COPY clients ./clients
+COPY simulator ./simulator
+COPY navigation ./navigation
+RUN if [ -f /build-config/pip.conf ]; then export PIP_CONFIG_FILE=/build-config/pip.conf; fi; \
+    /opt/riverbridge/bin/pip install --quiet --no-deps .
+
+# -- the image: the environment, the dashboard, the default configuration, a non-root user ---
+FROM ${BASE_IMAGE}
 
 # Unbuffered logs; glibc malloc tuned for 4 MB sensor buffers (fresh mmap'd buffers cost ~3 ms
 # of page faults per scan, see performance-measurements.md): the same environment
 # `riverbridge up` gives its children (clients/launcher.py, MALLOC_ENV).
 ENV PYTHONUNBUFFERED=1 \
     PYTHONDONTWRITEBYTECODE=1 \
-    PIP_NO_CACHE_DIR=1 \
-    PIP_DISABLE_PIP_VERSION_CHECK=1 \
     MALLOC_MMAP_THRESHOLD_=268435456 \
     MALLOC_TRIM_THRESHOLD_=1073741824 \
-    MALLOC_TOP_PAD_=67108864
+    MALLOC_TOP_PAD_=67108864 \
+    PATH=/opt/riverbridge/bin:$PATH \
+    RIVERBRIDGE_WEB_ROOT=/opt/riverbridge/web
 
-WORKDIR /build
-COPY pyproject.toml README.md riverbridge.py ./
-COPY schemas ./schemas
-COPY bridge ./bridge
-COPY clients ./clients
-COPY simulator ./simulator
-COPY navigation ./navigation
-RUN pip install . && rm -rf /build
-
+COPY --from=install /opt/riverbridge /opt/riverbridge
+COPY --from=dashboard /web/dist /opt/riverbridge/web
 # Default configuration; docker-compose.yml mounts ./config over it.
 COPY config /config
 

@@ -19,6 +19,9 @@ SUBCOMMANDS: dict[str, tuple[str, str]] = {
     "up": ("clients.up_cli", "run bridge, simulator and navigation as three local processes"),
     "report": ("clients.report_cli", "measure latency and bytes per topic and stage, next to "
                "the thesis's figures"),
+    "record": ("clients.recording.record_cli", "record a bridge's topics into an MCAP file"),
+    "play": ("clients.recording.play_cli", "publish an MCAP recording into a bridge at its "
+             "recorded timing"),
 }
 
 

@@ -23,6 +23,7 @@ from schemas.codec_cdr import from_cdr, to_cdr
 from schemas.codec_png import decode_png_data, encode_png_op
 from schemas.message import normalize
 from schemas.registry import TypeRegistry
+from schemas.safety import frame_problem
 
 LIDAR_POINTS = 345_600  # thesis LIDAR: 1440 azimuth x 240 elevation rays
 POINT_STEP_BYTES = 16  # x, y, z, intensity as float32
@@ -74,6 +75,8 @@ def run(num_points: int, repeats: int) -> list[tuple[str, float, float, int]]:
     cdr = to_cdr(registry, spec.name, msg)
     png_frame = encode_png_op(json_frame)
     png_data = codec_json.loads(png_frame)["data"]
+    json_decoded, cbor_decoded = codec_json.loads(json_frame), codec_cbor.loads(cbor_frame)
+    json_envelope = {k: v for k, v in json_decoded.items() if k != "msg"}
     steps = [
         ("normalize (canonical input)", lambda: normalize(spec, raw, now_ns=0), 0),
         ("normalize (from JSON, base64)", lambda: normalize(spec, json_msg, now_ns=0), 0),
@@ -86,6 +89,12 @@ def run(num_points: int, repeats: int) -> list[tuple[str, float, float, int]]:
             lambda: normalize(spec, codec_cbor.loads(cbor_frame)["msg"], now_ns=0),
             0,
         ),
+        # The door check the bridge adds to each inbound frame (bridge.inbound.decode_frame):
+        # a CBOR frame whole; a JSON frame orjson parsed without its typed `msg`; a JSON frame
+        # the lenient parser read (NaN tokens), whole.
+        ("door check (CBOR frame)", lambda: frame_problem(cbor_decoded), 0),
+        ("door check (strict JSON frame)", lambda: frame_problem(json_envelope), 0),
+        ("door check (lenient JSON frame)", lambda: frame_problem(json_decoded), 0),
         ("cdr to", lambda: to_cdr(registry, spec.name, msg), len(cdr)),
         ("cdr from", lambda: from_cdr(registry, spec.name, cdr), 0),
         ("png encode (of the JSON frame)", lambda: encode_png_op(json_frame), len(png_frame)),

@@ -210,7 +210,7 @@ def radar_rows(repeat: int) -> list[Row]:
     print(f"\n## RADAR: {label}, image {power.shape}")
     rows = []
     for kind in ("ca", "soca", "goca", "os"):
-        detector = CfarDetector.from_config(CfarConfig(detector=kind), num_cells=power.shape[1])
+        detector = CfarDetector.from_config(CfarConfig(detector=kind))
         hits = detector.detect(power)[0]
         print(f"{kind}: {int(hits.sum())} detections ({hits.mean():.3f} of cells)")
         target = 5 if kind == "soca" else None
@@ -223,14 +223,38 @@ def radar_rows(repeat: int) -> list[Row]:
                 2 if kind == "soca" else None,
             )
         )
-    soca = CfarDetector.from_config(CfarConfig(), num_cells=power.shape[1])
+    soca = CfarDetector.from_config(CfarConfig())
 
     def whole() -> None:
-        found = detect(radar_power(msg), geometry, soca)
-        detection_array_msg(found, STAMP_NS, "radar", soca)
+        found, targets = detect(radar_power(msg), geometry, soca)
+        detection_array_msg(found, targets, STAMP_NS, "radar", soca)
 
     rows.append(row("radar: image -> detections msg (soca)", whole, repeat))
+    default = default_radar_image()
+    if default is not None:
+        default_geometry = PolarGeometry.of(default)
+
+        def default_whole() -> None:
+            found, targets = detect(radar_power(default), default_geometry, soca)
+            detection_array_msg(found, targets, STAMP_NS, "radar", soca)
+
+        rows.append(row("radar: image -> targets msg (default 72x25)", default_whole, repeat))
     return rows
+
+
+def default_radar_image() -> dict | None:
+    """The simulator's default radar (thesis table 4.1: 72 x 25) at the start pose."""
+    try:
+        from simulator.radar import Radar
+        from simulator.scene import build_scene
+    except ImportError:
+        return None
+    scene = build_scene()
+    radar = Radar()
+    try:
+        return radar.message(radar.sweep(scene, scene.start_pose), STAMP_NS)
+    finally:
+        radar.close()
 
 
 def camera_frame() -> tuple[bytes, str]:

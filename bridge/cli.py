@@ -6,14 +6,20 @@ import argparse
 import asyncio
 import contextlib
 import logging
+import os
 import signal
+import ssl
 from pathlib import Path
 
-from pydantic import ValidationError
+from pydantic import SecretStr, ValidationError
 
-from bridge.config import MIB, MIN_SEND_BUFFER, BridgeConfig
+from bridge.access import scheme, tls_context
+from bridge.config import AUTH_SECRET_ENV, MIB, MIN_SEND_BUFFER, BridgeConfig
+from bridge.dds.options import add_dds_options, dds_config_fields, print_config
+from bridge.errors import DdsStartError
 from bridge.server import run_bridge
 from schemas.process_tuning import freeze_startup_heap, tune_process
+from schemas.rosauth import read_secret
 
 logger = logging.getLogger("bridge.cli")
 
@@ -65,6 +71,9 @@ def build_parser() -> argparse.ArgumentParser:
                         help="allow only topics matching this fnmatch pattern (repeatable)")
     parser.add_argument("--services-glob", action="append", default=[], metavar="PATTERN",
                         help="allow only services matching this fnmatch pattern (repeatable)")
+    parser.add_argument("--actions-glob", action="append", default=[], metavar="PATTERN",
+                        help="allow only actions matching this fnmatch pattern (repeatable; "
+                             "default: the --services-glob patterns)")
     parser.add_argument("--send-buffer", type=buffer_bytes, default=defaults.send_buffer_bytes,
                         metavar="BYTES",
                         help="bytes a client may leave untaken before each of its topics loses "
@@ -78,9 +87,29 @@ def build_parser() -> argparse.ArgumentParser:
                         choices=["debug", "info", "warning", "error", "critical"])
     parser.add_argument("--interfaces", action="append", default=[], type=Path, metavar="DIR",
                         help="extra folder of <pkg>/{msg,srv,action}/ definitions (repeatable)")
+    secret_env = os.environ.get(AUTH_SECRET_ENV)
+    parser.add_argument("--auth-secret-file", type=Path, metavar="FILE",
+                        default=Path(secret_env) if secret_env else None,
+                        help="require rosauth's auth op, checked against the secret on the "
+                             f"file's first line, before any other op (default: "
+                             f"${AUTH_SECRET_ENV})")
+    parser.add_argument("--certfile", type=Path, default=None, metavar="FILE",
+                        help="TLS certificate chain (PEM): serve wss:// and https://")
+    parser.add_argument("--keyfile", type=Path, default=None, metavar="FILE",
+                        help="TLS private key (PEM) of --certfile")
+    parser.add_argument("--allowed-origins", nargs="+", action="extend", default=[],
+                        metavar="GLOB", help="browser Origins allowed to open a websocket "
+                        "(fnmatch, e.g. 'https://*.example.org'); others get 403; clients "
+                        "without Origin are not affected")
+    parser.add_argument("--max-clients", type=positive_int, default=None, metavar="N",
+                        help="refuse handshakes (503) while N clients are connected")
+    parser.add_argument("--reply-budget", type=positive_int, default=defaults.reply_budget_bytes,
+                        metavar="BYTES", help="unread answers (never dropped) a client may "
+                        "leave before it is closed with 1008 (default 32 MiB)")
     parser.add_argument("--web-root", type=Path, default=None, metavar="DIR",
                         help="built web dashboard to serve at http://HOST:PORT/ (default: "
                              "$RIVERBRIDGE_WEB_ROOT, else the repository's web/dist)")
+    add_dds_options(parser)
     return parser
 
 
@@ -89,9 +118,16 @@ def config_from_args(args: argparse.Namespace) -> BridgeConfig:
         host=args.host, port=args.port, max_message_size=args.max_message_size,
         fragment_timeout_s=args.fragment_timeout, call_timeout_s=args.call_timeout,
         topics_glob=tuple(args.topics_glob), services_glob=tuple(args.services_glob),
+        actions_glob=tuple(args.actions_glob),
         send_buffer_bytes=args.send_buffer, interface_dirs=tuple(args.interfaces),
         offload_threshold_bytes=args.offload_threshold,
         web_root=args.web_root,
+        auth_secret=None if args.auth_secret_file is None else SecretStr(
+            read_secret(args.auth_secret_file)),
+        certfile=args.certfile, keyfile=args.keyfile,
+        allowed_origins=tuple(args.allowed_origins), max_clients=args.max_clients,
+        reply_budget_bytes=args.reply_budget,
+        **dds_config_fields(args),
     )
 
 
@@ -102,7 +138,7 @@ async def serve_until_signalled(config: BridgeConfig) -> None:
         loop.add_signal_handler(sig, stop.set)
     try:
         async with run_bridge(config) as running:
-            logger.info("listening on ws://%s:%d", config.host, running.port)
+            logger.info("listening on %s://%s:%d", scheme(config), config.host, running.port)
             tune_process()
             freeze_startup_heap()
             await stop.wait()
@@ -118,10 +154,18 @@ def main(argv: list[str] | None = None) -> int:
     for folder in args.interfaces:
         if not folder.is_dir():
             parser.error(f"argument --interfaces: {folder} is not a directory")
+    for option in ("auth_secret_file", "certfile", "keyfile"):
+        path = getattr(args, option)
+        if path is not None and not path.is_file():
+            parser.error(f"argument --{option.replace('_', '-')}: no such file: {path}")
     try:
         config = config_from_args(args)
-    except ValidationError as exc:
+        tls_context(config)  # a certificate that does not load fails here, not at start-up
+    except (ValidationError, ValueError, OSError, ssl.SSLError) as exc:
         parser.error(str(exc))
+    if args.print_dds_config:
+        print(print_config(args))
+        return 0
     logging.basicConfig(level=args.log_level.upper(),
                         format="%(asctime)s %(levelname)s %(name)s: %(message)s")
     logger.setLevel(logging.INFO)  # the "listening on" line is always printed
@@ -129,5 +173,9 @@ def main(argv: list[str] | None = None) -> int:
     websockets_level = logging.DEBUG if args.log_level == "debug" else logging.WARNING
     logging.getLogger("websockets").setLevel(websockets_level)
     with contextlib.suppress(KeyboardInterrupt):
-        asyncio.run(serve_until_signalled(config))
+        try:
+            asyncio.run(serve_until_signalled(config))
+        except DdsStartError as exc:
+            logger.error("%s", exc)
+            return 1
     return 0

@@ -14,6 +14,7 @@ from bridge.session import ClientSession, StatusLevel
 from bridge.sinks import LocalFanout, MessageSink
 from bridge.subscription import Release, Subscription
 from schemas.registry import TypeRegistry
+from schemas.safety import echo, safe_text
 
 logger = logging.getLogger("bridge.core")
 
@@ -55,6 +56,8 @@ class BridgeState:
         self.pending_goals: dict[str, PendingGoal] = {}
         self.params: dict[str, str] = {}
         self.sinks: list[MessageSink] = [LocalFanout()]
+        # Nodes another middleware knows (a DDS domain's ROS 2 nodes), for rosapi's listings.
+        self.external_nodes: set[str] = set()
         # Services the bridge answers itself, name -> RosapiService (set by the core).
         self.rosapi: dict[str, Any] = {}
         self.clients_ever = 0
@@ -98,21 +101,45 @@ class Context:
         for sink in self.state.sinks:
             sink.accept(self, message, origin_node)
 
+    def note_problem(self, session: ClientSession) -> bool:
+        """Count a problem of `session`; True if it may be logged in full (see ProblemLog)."""
+        summary = session.problems.expired_summary(self.now_ns, session.node)
+        if summary is not None:
+            logger.warning("%s", summary)
+        full, deadline = session.problems.note(self.now_ns)
+        if deadline is not None:
+            self.schedule(("problems", session.client_id), deadline)
+        return full
+
     def schedule(self, key: object, at_ns: int) -> None:
         self.effects.append(Schedule(key, at_ns))
 
     def close(self, client_id: int, code: int, reason: str) -> None:
         self.effects.append(Close(client_id, code, reason))
 
-    def problem(self, session: ClientSession, op: str, op_id: Any, text: str,
-                level: StatusLevel = StatusLevel.ERROR) -> None:
-        """Log one line naming client, op, id and problem; tell the client if it opted in."""
-        log_level = logging.WARNING if level == StatusLevel.WARNING else logging.ERROR
-        if level == StatusLevel.INFO:
-            log_level = logging.INFO
-        logger.log(log_level, "[%s] op=%s id=%s: %s", session.node, op, op_id, text)
+    def problem(self, session: ClientSession, op: Any, op_id: Any, text: str,
+                level: StatusLevel = StatusLevel.ERROR, exc_info: BaseException | None = None,
+                ) -> None:
+        """Log one short line naming client, op, id and problem (rate-limited per client,
+        `bridge.problems`); tell the client if it opted in with `set_level`."""
+        text = safe_text(text)
+        if self.note_problem(session):
+            log_level = {StatusLevel.INFO: logging.INFO,
+                         StatusLevel.WARNING: logging.WARNING}.get(level, logging.ERROR)
+            shown_id = safe_text(op_id, 80) if isinstance(op_id, str) else echo(op_id, 80)
+            logger.log(log_level, "[%s] op=%s id=%s: %s", session.node, safe_text(str(op), 60),
+                       shown_id, text, exc_info=exc_info)
         if level >= session.status_level and session.status_level != StatusLevel.NONE:
             status: dict[str, Any] = {"op": "status", "level": level.name.lower(), "msg": text}
             if op_id is not None:
                 status["id"] = op_id
             self.send(session.client_id, status)
+
+
+def log_problem_summary(ctx: Context, client_id: int) -> None:
+    """A client's problem window ended: one line for everything not logged in it."""
+    session = ctx.state.sessions.get(client_id)
+    if session is not None:
+        summary = session.problems.expired_summary(ctx.now_ns, session.node)
+        if summary is not None:
+            logger.warning("%s", summary)

@@ -13,33 +13,45 @@ from collections.abc import Callable, Hashable
 from typing import Any
 
 from bridge.config import BridgeConfig
-from bridge.context import BridgeState, Context
+from bridge.context import BridgeState, Context, log_problem_summary
 from bridge.effects import Effect
 from bridge.errors import BridgeError, InvalidNameError
-from bridge.inbound import PreparedMessage, decode_frame
+from bridge.inbound import PreparedMessage, RefusedFrame, decode_frame
 from bridge.names import absolute_name
-from bridge.ops import Handler, actions, fragments, levels, merge_tables, services, topics
-from bridge.outgoing import TopicMessage, payload_size
+from bridge.ops import (
+    Handler,
+    actions,
+    auth,
+    fragments,
+    levels,
+    merge_tables,
+    services,
+    topics,
+)
+from bridge.outgoing import MIN_FRAGMENT_SIZE, TopicMessage, payload_size
 from bridge.rosapi import ROSAPI_SERVICES
 from bridge.session import ClientSession
 from bridge.sinks import MessageSink
 from schemas.errors import SchemaError
 from schemas.message import normalize
-from schemas.ops import OpError, parse_op, parse_publish
+from schemas.ops import MAX_NAME_CHARS, OpError, parse_op, parse_publish, reply_id
 from schemas.registry import TypeRegistry
+from schemas.safety import echo, safe_text
 from schemas.specs import MessageSpec
 from schemas.tracing import cdr_size, header_stamp_ns
 
 logger = logging.getLogger("bridge.core")
 
 OP_HANDLERS: dict[str, Handler] = merge_tables(
-    topics.HANDLERS, services.HANDLERS, actions.HANDLERS, fragments.HANDLERS, levels.HANDLERS)
+    topics.HANDLERS, services.HANDLERS, actions.HANDLERS, fragments.HANDLERS, levels.HANDLERS,
+    auth.HANDLERS)
 
 # Deadline keys are tuples whose first item selects the handler; the rest are its arguments.
 DEADLINE_HANDLERS: dict[str, Callable[..., None]] = {
     "release": topics.on_release_deadline,
     "call": services.on_call_deadline,
     "fragment": fragments.on_fragment_deadline,
+    "problems": log_problem_summary,
 }
 
 # Clean-up per op family when a client leaves; each releases what the client owned.
@@ -55,12 +67,20 @@ class BridgeCore:
 
     # -- connections -------------------------------------------------------------------------
 
-    def connect(self, peer: str = "") -> int:
-        """Register a new client; returns its id (its node is `/rosbridge_client_<id>`)."""
+    def connect(self, peer: str = "", node: str | None = None) -> int:
+        """Register a new client; returns its id (its node is `/rosbridge_client_<id>`).
+
+        `node` names an in-process client of another middleware instead (a DDS mirror's
+        stand-in for a remote node): its ops and effects flow like a websocket client's.
+        """
         self.state.clients_ever += 1
         client_id = self.state.clients_ever
-        node = f"/rosbridge_client_{client_id}"
-        self.state.sessions[client_id] = ClientSession(client_id, node, peer)
+        # An in-process client of another middleware (`node` given) is trusted; a websocket
+        # client must authenticate first when the bridge has an auth secret.
+        authenticated = node is not None or self.state.config.auth_secret is None
+        node = node or f"/rosbridge_client_{client_id}"
+        self.state.sessions[client_id] = ClientSession(client_id, node, peer,
+                                                       authenticated=authenticated)
         logger.info("[%s] connected from %s", node, peer or "?")
         return client_id
 
@@ -72,6 +92,9 @@ class BridgeCore:
             return []
         for release in RELEASERS:
             release(ctx, session)
+        summary = session.problems.summary(session.node, now_ns)
+        if summary is not None:
+            logger.warning("%s", summary)
         logger.info("[%s] disconnected", session.node)
         return ctx.effects
 
@@ -151,28 +174,50 @@ class BridgeCore:
         """Handle one decoded message (and any message its fragments complete)."""
         ctx = Context(self.state, now_ns)
         session = self.state.sessions.get(client_id)
-        if session is None:
+        if session is None or session.closing:
             return []
-        self._dispatch(ctx, session, message)
+        self._dispatch_guarded(ctx, session, message)
         while ctx.reassembled and client_id in self.state.sessions:
             text = ctx.reassembled.pop(0)
             try:
-                self._dispatch(ctx, session, decode_frame(text))
+                message = decode_frame(text)
             except SchemaError as exc:
                 ctx.problem(session, "fragment", None, f"reassembled text is not JSON: {exc}")
+                continue
+            self._dispatch_guarded(ctx, session, message)
         return ctx.effects
 
+    def _dispatch_guarded(self, ctx: Context, session: ClientSession, message: Any) -> None:
+        """`_dispatch`, where a bug costs one op: never the connection (1011) or the server."""
+        try:
+            self._dispatch(ctx, session, message)
+        except Exception as exc:
+            head = message if isinstance(message, dict) else {}
+            ctx.problem(session, head.get("op", "?"), reply_id(head.get("id")),
+                        f"internal error: {echo(exc)}", exc_info=exc)
+            with contextlib.suppress(Exception):
+                answer_failed_request(ctx, session, head, f"internal error: {echo(exc)}",
+                                      log=False)
+
     def _dispatch(self, ctx: Context, session: ClientSession, message: Any) -> None:
+        if isinstance(message, RefusedFrame):
+            answer_failed_request(ctx, session, message.head, message.problem)
+            return
         if not isinstance(message, dict):
             ctx.problem(session, "?", None,
                         f"message must be a JSON object, got {type(message).__name__}")
             return
-        op_name, op_id = message.get("op"), message.get("id")
+        op_name, op_id = message.get("op"), reply_id(message.get("id"))
         if "fragment_size" in message:
             set_fragment_size(ctx, session, message["fragment_size"], op_name, op_id)
         if not isinstance(op_name, str) or op_name not in OP_HANDLERS:
-            what = "message without an op" if op_name is None else f"Unknown operation: {op_name}"
-            ctx.problem(session, str(op_name), op_id, what)
+            what = ("message without an op" if op_name is None
+                    else f"Unknown operation: {safe_text(str(op_name), 60)}")
+            ctx.problem(session, op_name, op_id, what)
+            return
+        if not session.authenticated and op_name != "auth":
+            answer_failed_request(ctx, session, message, "not authenticated: this bridge needs "
+                                  "a valid auth op (rosauth) before any other")
             return
         handler = OP_HANDLERS[op_name]
         try:
@@ -184,9 +229,6 @@ class BridgeCore:
             handler(ctx, session, op)
         except (BridgeError, SchemaError) as exc:
             ctx.problem(session, op_name, op_id, str(exc))
-        except Exception as exc:  # a bug must cost one op, never the connection or the server
-            logger.exception("[%s] op=%s id=%s: internal error", session.node, op_name, op_id)
-            answer_failed_request(ctx, session, message, f"internal error: {exc!r}")
 
     # -- time --------------------------------------------------------------------------------
 
@@ -232,24 +274,31 @@ def set_fragment_size(ctx: Context, session: ClientSession, value: Any, op_name:
     if value is None:
         session.fragment_size = None
     elif isinstance(value, int) and not isinstance(value, bool) and value > 0:
-        session.fragment_size = value
+        session.fragment_size = max(value, MIN_FRAGMENT_SIZE)
     else:
-        ctx.problem(session, str(op_name), op_id,
-                    f"fragment_size must be a positive integer or null, got {value!r}")
+        ctx.problem(session, op_name, op_id,
+                    f"fragment_size must be a positive integer or null, got {echo(value, 60)}")
 
 
 def answer_failed_request(ctx: Context, session: ClientSession, message: dict[str, Any],
-                          problem: str) -> None:
+                          problem: str, log: bool = True) -> None:
     """Log an op that could not be handled; a caller waiting for an answer still gets one.
 
     A `call_service` is answered with `result: false`, a `send_action_goal` with a failed
     `action_result`, and a provider's unusable `service_response` fails its caller's call.
+    The answer echoes the caller's service or action string cut to `MAX_NAME_CHARS` and its
+    id only if acceptable, so it is never much larger than the request.
     """
-    op_name, op_id = message["op"], message.get("id")
-    ctx.problem(session, op_name, op_id, problem)
-    if op_name == "call_service" and isinstance(message.get("service"), str):
-        services.respond(ctx, session.client_id, message["service"], op_id, problem, False)
+    op_name, op_id = message.get("op"), reply_id(message.get("id"))
+    problem = safe_text(problem)
+    if log:
+        ctx.problem(session, op_name if op_name is not None else "?", op_id, problem)
+    service, action = message.get("service"), message.get("action")
+    if op_name == "call_service" and isinstance(service, str):
+        services.respond(ctx, session.client_id, service[:MAX_NAME_CHARS], op_id, problem,
+                         False)
     elif op_name == "service_response":
         services.settle_unparsed_response(ctx, session, message, problem)
-    elif op_name == "send_action_goal" and isinstance(message.get("action"), str):
-        actions.fail_goal(ctx, session.client_id, message["action"], op_id, problem)
+    elif op_name == "send_action_goal" and isinstance(action, str):
+        actions.fail_goal(ctx, session.client_id, action[:MAX_NAME_CHARS], op_id, problem)
+

@@ -25,3 +25,7 @@ class GraphConflictError(BridgeError):
 
 class RosapiError(BridgeError):
     """A rosapi request that cannot be answered; the text goes back as `values`."""
+
+
+class DdsStartError(BridgeError):
+    """The bridge cannot join its DDS domain (bad interface, Cyclone refused the config)."""

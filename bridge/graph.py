@@ -28,6 +28,8 @@ class TopicEntry:
     subscribers: set[str] = field(default_factory=set)
     latching: set[str] = field(default_factory=set)
     latched: TopicMessage | None = None
+    # The `qos` object each publishing node advertised with (a DDS mirror's writer QoS).
+    qos: dict[str, dict] = field(default_factory=dict)
 
     def is_unused(self) -> bool:
         return not self.publishers and not self.subscribers
@@ -111,6 +113,7 @@ class Graph:
         if not ids:
             del entry.publishers[node]
             entry.latching.discard(node)
+            entry.qos.pop(node, None)
             if not entry.latching:
                 entry.latched = None
         self.forget_if_unused(name)

@@ -33,6 +33,7 @@ from websockets.protocol import State
 
 from bridge.effects import Send
 from bridge.outgoing import CBOR, CBOR_RAW, Delivery, WireFrame, render
+from bridge.reply_budget import ReplyBudget
 from bridge.sendqueue import SendQueue, Waiting
 
 logger = logging.getLogger("bridge.server")
@@ -63,16 +64,22 @@ class ClientLink:
     """Outgoing side of one websocket: `offer` each `Send`; `close` when the client leaves."""
 
     def __init__(self, client_id: int, ws: ServerConnection, *, limit_bytes: int,
-                 pool: Executor, offload_bytes: int, delivered: Delivered) -> None:
+                 pool: Executor, offload_bytes: int, reply_budget_bytes: int,
+                 delivered: Delivered, over_budget: Callable[[str], None]) -> None:
         self.client_id = client_id
         self.ws = ws
         self.queue = SendQueue(limit_bytes)
+        # Answers are never dropped: those queued unread are bounded by closing the client.
+        self.replies = ReplyBudget(reply_budget_bytes)
+        self.over_budget = False
+        self._over_budget = over_budget
         # What the transport may hold before messages queue (a quarter of a small bound), and
         # the queue from which publishers feeding this link wait for it (1 MiB by default).
         self.room_bytes = min(WRITE_HIGH_WATER, limit_bytes // 4)
         self.pause_bytes = limit_bytes // 16
         self.frames_sent = 0
-        self.closed = False
+        self.closed = False  # the client has left
+        self.closing = False  # the bridge is closing the connection
         self._loop = asyncio.get_running_loop()
         self._pool = pool
         self._offload_bytes = offload_bytes
@@ -95,7 +102,7 @@ class ClientLink:
 
     def offer(self, send: Send) -> bool:
         """Write `send` now or queue it; True if publishers feeding this link should pause."""
-        if self.closed:
+        if self.closed or self.closing:
             return False
         if (not len(self.queue) and send.drop_key not in self._busy and self._has_room()
                 and not self._needs_worker(send)):
@@ -108,13 +115,14 @@ class ClientLink:
         return self.wants_pause()
 
     def _needs_worker(self, send: Send) -> bool:
-        """Encode on a worker? Only large items whose encode leaves the GIL for part of the
-        time (base64 for JSON, zlib for PNG) or runs in Python (CDR): CBOR's encoder is C code
-        holding the GIL, so a worker would stall the loop as long and add a thread hop."""
+        """Encode on a worker? Only large messages whose encode leaves the GIL for part of
+        the time (base64 for JSON, zlib for PNG) or runs in Python (CDR): CBOR's encoder, and
+        the JSON of an answer, are C code holding the GIL, so a worker would stall the loop as
+        long and add a thread hop."""
         item = send.item
-        if item.size_hint < self._offload_bytes:
+        if item.size_hint < self._offload_bytes or not isinstance(item, Delivery):
             return False
-        return not (isinstance(item, Delivery) and item.encoding == CBOR)
+        return item.encoding != CBOR
 
     def _enqueue(self, send: Send) -> None:
         frames = None
@@ -125,6 +133,9 @@ class ClientLink:
             nbytes = sum(len(f.data) for f in frames)
         else:
             nbytes = estimated_size(send)
+        if send.drop_key is None and not self.replies.charge(nbytes) and not self.over_budget:
+            self.over_budget = True
+            self._over_budget(self.replies.reason())  # the edge closes the client
         victims = self.queue.push(send, nbytes, frames, self._outside_bytes())
         if victims:
             logger.debug("client %d: dropped %d oldest of %s", self.client_id, len(victims),
@@ -139,6 +150,8 @@ class ClientLink:
             if waiting.frames is None:
                 self._start_render(waiting)
                 continue
+            if waiting.send.drop_key is None:
+                self.replies.credit(waiting.nbytes)  # answers are rendered when queued
             self._write(waiting.send, waiting.frames)
         if len(self.queue) and not self._corked and not self._has_room():
             self._await_drain()
@@ -280,7 +293,7 @@ class ClientLink:
     @property
     def gone(self) -> bool:
         """The client left, or its connection is closing (nothing more will drain)."""
-        return self.closed or self._transport.is_closing()
+        return self.closed or self.closing or self._transport.is_closing()
 
     def wants_pause(self) -> bool:
         """Should readers feeding this link wait for it before reading on?"""

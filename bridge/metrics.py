@@ -1,16 +1,31 @@
-"""Prometheus text exposition (format 0.0.4) of the bridge's counters, for ``GET /metrics``.
+"""Prometheus exposition of the bridge's counters for ``GET /metrics``, by prometheus-client.
 
-Pure rendering: `render_metrics` turns a `MetricsSnapshot` into the text a Prometheus scraper
-reads; the edge builds the snapshot from the tracer and the send queues at request time.
+The bridge already counts everything (`BridgeTracer`, the send queues), so nothing is
+incremented here: at request time the edge builds a `MetricsSnapshot`, and `render_metrics`
+exposes it through a custom collector in a registry of its own (no process-global registry),
+next to prometheus-client's standard process, platform and GC collectors (``process_*``,
+``python_*``). Metric names are those of the earlier hand-written exposition
+(``riverbridge_messages_total`` ...); values are now written as floats (``7.0``) and labels
+in name order.
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Mapping
-from dataclasses import dataclass
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass, field
+
+from prometheus_client import (
+    CollectorRegistry,
+    GCCollector,
+    PlatformCollector,
+    ProcessCollector,
+    generate_latest,
+)
+from prometheus_client.core import CounterMetricFamily, GaugeMetricFamily, Metric
 
 from bridge.tracing import TopicTraffic
 
+# Text exposition format 0.0.4, which generate_latest writes and every scraper reads.
 CONTENT_TYPE = "text/plain; version=0.0.4; charset=utf-8"
 
 
@@ -24,53 +39,72 @@ class MetricsSnapshot:
     cpu_percent: float
     rss_bytes: int
     spans_discarded: int = 0
+    # Restarts per component as `riverbridge up` reports them (schemas.supervision).
+    restarts: Mapping[str, int] = field(default_factory=dict)
 
 
-def escape_label(value: str) -> str:
-    """Label values escape backslash, double quote and newline (exposition format)."""
-    return value.replace("\\", "\\\\").replace('"', '\\"').replace("\n", "\\n")
+def safe_label(value: str) -> str:
+    """A label value that has a UTF-8 form: a lone surrogate (a client's odd topic name) is
+    shown backslash-escaped instead of failing the whole page with a 500."""
+    if value.isascii():
+        return value
+    return value.encode("utf-8", "backslashreplace").decode("utf-8")
 
 
-def _labels(**labels: str) -> str:
-    return "{" + ",".join(f'{key}="{escape_label(value)}"' for key, value in labels.items()) + "}"
+class SnapshotCollector:
+    """A prometheus-client collector of one snapshot: counters per topic, a few gauges."""
 
+    def __init__(self, snapshot: MetricsSnapshot) -> None:
+        self._snapshot = snapshot
 
-def _family(name: str, kind: str, help_text: str,
-            samples: Iterable[tuple[str, float]]) -> list[str]:
-    lines = [f"# HELP {name} {help_text}", f"# TYPE {name} {kind}"]
-    lines += [f"{name}{labels} {value:g}" if isinstance(value, float) else
-              f"{name}{labels} {value}" for labels, value in samples]
-    return lines
+    def collect(self) -> Iterator[Metric]:
+        snapshot = self._snapshot
+        topics = sorted(snapshot.topics.items())
+        messages = CounterMetricFamily(
+            "riverbridge_messages", "Messages published into (in) or delivered out of (out) "
+            "the bridge, per topic.", labels=["topic", "direction"])
+        wire = CounterMetricFamily("riverbridge_wire_bytes", "Websocket payload bytes per "
+                                   "topic.", labels=["topic", "direction"])
+        for direction in ("in", "out"):
+            for topic, traffic in topics:
+                labels = [safe_label(topic), direction]
+                messages.add_metric(labels, getattr(traffic, f"messages_{direction}"))
+                wire.add_metric(labels, getattr(traffic, f"wire_bytes_{direction}"))
+        payload = CounterMetricFamily(
+            "riverbridge_payload_bytes", "Serialized ROS 2 (CDR) bytes of the stamped messages "
+            "published, per topic.", labels=["topic"])
+        for topic, traffic in topics:
+            payload.add_metric([safe_label(topic)], traffic.payload_bytes_in)
+        dropped = CounterMetricFamily(
+            "riverbridge_dropped", "Messages dropped for a slow subscriber (send queue or "
+            "subscription queue), per topic and subscriber.", labels=["topic", "subscriber"])
+        for (topic, subscriber), count in sorted(snapshot.drops.items()):
+            dropped.add_metric([safe_label(topic), safe_label(subscriber)], count)
+        yield from (messages, wire, payload, dropped)
+        yield GaugeMetricFamily("riverbridge_clients", "Connected websocket clients.",
+                                value=snapshot.clients)
+        yield GaugeMetricFamily("riverbridge_process_cpu_percent", "CPU of the bridge process "
+                                "over the last stats interval (100 = one core).",
+                                value=snapshot.cpu_percent)
+        yield GaugeMetricFamily("riverbridge_process_resident_memory_bytes",
+                                "Resident memory of the bridge process.", value=snapshot.rss_bytes)
+        yield CounterMetricFamily("riverbridge_trace_spans_discarded", "Trace spans discarded "
+                                  "because the bounded span buffer was full.",
+                                  value=snapshot.spans_discarded)
+        if snapshot.restarts:
+            restarts = CounterMetricFamily(
+                "riverbridge_component_restarts", "Restarts of each component by riverbridge up "
+                "(/riverbridge/restarts).", labels=["component"])
+            for component, count in sorted(snapshot.restarts.items()):
+                restarts.add_metric([safe_label(component)], count)
+            yield restarts
 
 
 def render_metrics(snapshot: MetricsSnapshot) -> str:
-    """The exposition text, one family per counter, topics sorted."""
-    topics = sorted(snapshot.topics.items())
-    lines = _family(
-        "riverbridge_messages_total", "counter", "Messages published into (in) or delivered "
-        "out of (out) the bridge, per topic.",
-        [(_labels(topic=t, direction="in"), c.messages_in) for t, c in topics]
-        + [(_labels(topic=t, direction="out"), c.messages_out) for t, c in topics])
-    lines += _family(
-        "riverbridge_wire_bytes_total", "counter", "Websocket payload bytes per topic.",
-        [(_labels(topic=t, direction="in"), c.wire_bytes_in) for t, c in topics]
-        + [(_labels(topic=t, direction="out"), c.wire_bytes_out) for t, c in topics])
-    lines += _family(
-        "riverbridge_payload_bytes_total", "counter", "Serialized ROS 2 (CDR) bytes of the "
-        "stamped messages published, per topic.",
-        [(_labels(topic=t), c.payload_bytes_in) for t, c in topics])
-    lines += _family(
-        "riverbridge_dropped_total", "counter", "Messages dropped for a slow subscriber "
-        "(send queue or subscription queue), per topic and subscriber.",
-        [(_labels(topic=t, subscriber=s), n) for (t, s), n in sorted(snapshot.drops.items())])
-    lines += _family("riverbridge_clients", "gauge", "Connected websocket clients.",
-                     [("", snapshot.clients)])
-    lines += _family("riverbridge_process_cpu_percent", "gauge", "CPU of the bridge process "
-                     "over the last stats interval (100 = one core).",
-                     [("", float(snapshot.cpu_percent))])
-    lines += _family("riverbridge_process_resident_memory_bytes", "gauge",
-                     "Resident memory of the bridge process.", [("", snapshot.rss_bytes)])
-    lines += _family("riverbridge_trace_spans_discarded_total", "counter",
-                     "Trace spans discarded because the bounded span buffer was full.",
-                     [("", snapshot.spans_discarded)])
-    return "\n".join(lines) + "\n"
+    """The exposition text of `snapshot` and of this process (CPU seconds, memory, fds, GC)."""
+    registry = CollectorRegistry(auto_describe=False)
+    registry.register(SnapshotCollector(snapshot))
+    ProcessCollector(registry=registry)
+    PlatformCollector(registry=registry)
+    GCCollector(registry=registry)
+    return generate_latest(registry).decode("utf-8")

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import threading
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Any
 
 import numpy as np
@@ -24,6 +25,10 @@ JSON = "none"
 PNG = "png"
 CBOR = "cbor"
 CBOR_RAW = "cbor-raw"
+# Smallest outgoing fragment in characters; smaller requested sizes are raised to it. Smaller
+# fragments only multiply the envelope and the id each one repeats (amplification), and no
+# rosbridge client asks for less (ROS# sends 2^31 - 1: "never fragment").
+MIN_FRAGMENT_SIZE = 1000
 # Subscription compression precedence (protocol §4.4): the strongest wins among a client's ids.
 COMPRESSION_RANK = {JSON: 0, PNG: 1, CBOR: 2, CBOR_RAW: 3}
 
@@ -125,9 +130,13 @@ class Delivery:
         return self.message.frame(self.encoding, self.topic)
 
 
-@dataclass(frozen=True, slots=True)
+@dataclass(frozen=True)
 class ControlMessage:
-    """A small JSON op for one client (service_response, call_service, action ops, status)."""
+    """A small JSON op for one client (service_response, call_service, action ops, status).
+
+    Its frame is encoded once and kept: the edge measures it when queueing (the client's
+    reply budget, `bridge.reply_budget`) and sends the same bytes later.
+    """
 
     payload: dict[str, Any]
 
@@ -140,6 +149,10 @@ class ControlMessage:
         return self.payload.get("id")
 
     def frame(self) -> WireFrame:
+        return self.wire
+
+    @cached_property
+    def wire(self) -> WireFrame:
         return WireFrame(codec_json.dumps(self.payload), text=True)
 
 

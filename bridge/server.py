@@ -15,19 +15,23 @@ import asyncio
 import contextlib
 import logging
 import time
-from collections.abc import AsyncIterator, Hashable
+from collections.abc import AsyncIterator, Callable, Hashable
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
+from typing import Any
 
 from websockets.asyncio.server import Server, ServerConnection, serve
 from websockets.exceptions import ConnectionClosed
+from websockets.http11 import Request, Response
 
+from bridge.access import HandshakePolicy, scheme, tls_context
 from bridge.config import BridgeConfig
 from bridge.core import BridgeCore
 from bridge.effects import Close, Effect, Schedule, Send
 from bridge.http import HttpRoutes
 from bridge.intake import Intake
 from bridge.link import WRITE_HIGH_WATER, ClientLink
+from bridge.reply_budget import POLICY_VIOLATION
 from bridge.stats import BridgeTelemetry
 from bridge.webapp import default_web_root, mount_webapp
 from schemas.registry import TypeRegistry
@@ -47,6 +51,7 @@ TURN_S = 0.001
 # one) before the bridge stops reading that connection.
 INTAKE_FRAMES = 256
 INTAKE_BYTES = 32 * 1024 * 1024
+TRY_AGAIN_LATER = 1013  # RFC 6455: a handshake that raced past --max-clients
 
 
 class BridgeServer:
@@ -61,9 +66,12 @@ class BridgeServer:
         self._server: Server | None = None
         self._closing: set[asyncio.Task[None]] = set()
         self.http = HttpRoutes()  # plain HTTP on the websocket port; others add routes
+        self.access = HandshakePolicy(config)  # Origin and client-limit checks (bridge.access)
         mount_webapp(self.http, config.web_root or default_web_root())
         self.telemetry = BridgeTelemetry(self)  # spans, stats service, /metrics
         self._telemetry_task: asyncio.Task[None] | None = None
+        # In-process clients (a DDS mirror's stand-ins): client id -> who takes their sends.
+        self.internal_clients: dict[int, Callable[[Send], None]] = {}
 
     @property
     def port(self) -> int:
@@ -75,7 +83,7 @@ class BridgeServer:
             self._handle, self.config.host, self.config.port,
             compression=None, max_size=self.config.max_message_size,
             write_limit=WRITE_HIGH_WATER, close_timeout=CLOSE_TIMEOUT_S,
-            process_request=self.http,
+            process_request=self._process_request, ssl=tls_context(self.config),
         )
         self._telemetry_task = asyncio.create_task(self.telemetry.run(self.apply),
                                                    name="bridge-telemetry")
@@ -100,15 +108,30 @@ class BridgeServer:
         self._timers.clear()
         self._pool.shutdown(wait=False, cancel_futures=True)
 
+    def _process_request(self, connection: ServerConnection, request: Request) -> Response | None:
+        """Refuse handshakes `bridge.access` rejects (403, 503); plain HTTP goes to the routes."""
+        if "websocket" in request.headers.get("Upgrade", "").lower():
+            refusal = self.access.refusal(request, len(self.links))
+            if refusal is not None:
+                logger.warning("refused a websocket handshake from %s: %s",
+                               connection.remote_address, refusal[1].strip())
+                return connection.respond(*refusal)
+        return self.http(connection, request)
+
     # -- one connection ----------------------------------------------------------------------
 
     async def _handle(self, ws: ServerConnection) -> None:
+        if self.config.max_clients is not None and len(self.links) >= self.config.max_clients:
+            await ws.close(TRY_AGAIN_LATER, "too many clients")
+            return
         peer = "{}:{}".format(*ws.remote_address[:2]) if ws.remote_address else ""
         client_id = self.core.connect(peer)
         link = self.links[client_id] = ClientLink(
             client_id, ws, limit_bytes=self.config.send_buffer_bytes, pool=self._pool,
             offload_bytes=self.config.offload_threshold_bytes,
-            delivered=self.telemetry.tracer.delivered)
+            reply_budget_bytes=self.config.reply_budget_bytes,
+            delivered=self.telemetry.tracer.delivered,
+            over_budget=lambda reason: self._close_over_budget(client_id, reason))
         paced: set[ClientLink] = set()  # links this client's messages went to that are full
 
         def apply(effects: list[Effect]) -> None:
@@ -137,6 +160,11 @@ class BridgeServer:
             self.apply(self.core.disconnect(client_id, time.time_ns()))
             self.apply(self.telemetry.clients_changed())
 
+    def _close_over_budget(self, client_id: int, reason: str) -> None:
+        """A client left more answers unread than its reply budget (`bridge.reply_budget`)."""
+        logger.warning("client %d: closing, %s", client_id, reason)
+        self.apply([Close(client_id, POLICY_VIOLATION, reason)])
+
     @staticmethod
     async def _between_turns(link: ClientLink, intake: Intake, paced: set[ClientLink]) -> None:
         """Let the loop write and read elsewhere; read on once this client may go on."""
@@ -155,13 +183,16 @@ class BridgeServer:
                 link = self.links.get(effect.client_id)
                 if link is not None and link.offer(effect) and paced is not None:
                     paced.add(link)
+                elif link is None and effect.client_id in self.internal_clients:
+                    self.internal_clients[effect.client_id](effect)
             elif isinstance(effect, Schedule):
                 self._schedule(effect.key, effect.at_ns)
             elif isinstance(effect, Close):
                 link = self.links.get(effect.client_id)
-                if link is not None:
+                if link is not None and not link.closing:
+                    link.closing = True  # nothing more is sent to it or waited for
                     task = asyncio.get_running_loop().create_task(
-                        link.ws.close(effect.code, effect.reason))
+                        close_link(link, effect.code, effect.reason))
                     self._closing.add(task)
                     task.add_done_callback(self._closing.discard)
 
@@ -184,6 +215,16 @@ class BridgeServer:
                 for cid, link in self.links.items()}
 
 
+async def close_link(link: ClientLink, code: int, reason: str) -> None:
+    """Close a client's websocket; one that does not read cannot take the close frame behind
+    what fills its socket, so after CLOSE_TIMEOUT_S its connection is cut."""
+    try:
+        async with asyncio.timeout(CLOSE_TIMEOUT_S):
+            await link.ws.close(code, reason)
+    except TimeoutError:
+        link.ws.transport.abort()
+
+
 @dataclass(frozen=True)
 class RunningBridge:
     """A started bridge: where it listens, and its parts for tests and tools."""
@@ -191,10 +232,11 @@ class RunningBridge:
     host: str
     port: int
     server: BridgeServer
+    dds: Any = None  # the DDS mirror (bridge.dds.mirror.DdsMirror) when config.dds
 
     @property
     def url(self) -> str:
-        return f"ws://{self.host}:{self.port}"
+        return f"{scheme(self.server.config)}://{self.host}:{self.port}"
 
     @property
     def core(self) -> BridgeCore:
@@ -212,9 +254,17 @@ async def run_bridge(config: BridgeConfig,
         registry = TypeRegistry.with_defaults(config.interface_dirs)
     server = BridgeServer(config, BridgeCore(config, registry))
     await server.start()
+    mirror = None
     try:
-        yield RunningBridge(config.host, server.port, server)
+        if config.dds:  # imported only when asked: Cyclone DDS loads a C library
+            from bridge.dds.mirror import DdsMirror
+            joining = DdsMirror(server)
+            await joining.start()
+            mirror = joining
+        yield RunningBridge(config.host, server.port, server, mirror)
     finally:
+        if mirror is not None:
+            await mirror.stop()
         await server.stop()
 
 

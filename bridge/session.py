@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from enum import IntEnum
 
+from bridge.problems import ProblemLog
 from bridge.subscription import Subscription
 
 
@@ -45,6 +46,11 @@ class ClientSession:
     services: set[str] = field(default_factory=set)
     actions: set[str] = field(default_factory=set)
     fragments: dict[object, FragmentBuffer] = field(default_factory=dict)
+    problems: ProblemLog = field(default_factory=ProblemLog)
+    # False until a valid rosauth `auth` op when the bridge has an auth secret.
+    authenticated: bool = True
+    # Set once the core asked the edge to close the connection: later frames are ignored.
+    closing: bool = False
 
     def fragment_chars(self) -> int:
         """Characters held in all of the client's incomplete fragment lists."""

@@ -22,6 +22,7 @@ from bridge.http import respond
 from bridge.metrics import CONTENT_TYPE, MetricsSnapshot, render_metrics
 from bridge.rosapi.common import RosapiService
 from bridge.tracing import BridgeTracer
+from schemas.supervision import RESTARTS_TOPIC, restart_counts
 from schemas.tracing import (
     PUBLISH_PERIOD_S,
     STATS_SERVICE,
@@ -82,7 +83,15 @@ class BridgeTelemetry:
     def snapshot(self) -> MetricsSnapshot:
         return MetricsSnapshot(dict(self.tracer.topics), self.drops(),
                                len(self._core.state.sessions), self.cpu_percent,
-                               self._sampler.rss_bytes(), self.tracer.spans.discarded)
+                               self._sampler.rss_bytes(), self.tracer.spans.discarded,
+                               self.restarts())
+
+    def restarts(self) -> dict[str, int]:
+        """Component restarts from the latched report of `riverbridge up`, if one runs."""
+        entry = self._core.state.graph.topics.get(RESTARTS_TOPIC)
+        if entry is None or entry.latched is None:
+            return {}
+        return restart_counts(entry.latched.msg)
 
     def _answer_stats(self, ctx: Context, request: dict[str, Any]) -> dict[str, Any]:
         """`/riverbridge/stats` (riverbridge_msgs/srv/BridgeStats)."""

@@ -8,20 +8,39 @@ refuses it).
 from __future__ import annotations
 
 import asyncio
+import json
 import logging
+import os
 import random
+import ssl
+import time
+import urllib.parse
 from collections.abc import Iterator
 from contextlib import contextmanager
+from pathlib import Path
+from typing import Any
 
 import websockets
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, SecretStr
 from websockets.asyncio.client import ClientConnection
 from websockets.exceptions import InvalidURI, WebSocketException
 
 from clients.backoff import BackoffPolicy
 from clients.errors import ConnectionClosed, ConnectionFailed
+from schemas import rosauth
 
 logger = logging.getLogger(__name__)
+
+AUTH_SECRET_ENV = "RIVERBRIDGE_AUTH_SECRET_FILE"
+"""Environment variable naming a rosauth secret file: every connection then authenticates
+(`riverbridge up --auth-secret-file` sets it for the simulator and navigation; the bridge
+reads the same variable as its default ``--auth-secret-file``)."""
+
+
+def auth_secret_from_env() -> SecretStr | None:
+    """The secret in the file ``$RIVERBRIDGE_AUTH_SECRET_FILE`` names, or None if unset."""
+    path = os.environ.get(AUTH_SECRET_ENV)
+    return SecretStr(rosauth.read_secret(Path(path))) if path else None
 
 
 class TransportConfig(BaseModel):
@@ -39,6 +58,11 @@ class TransportConfig(BaseModel):
     ping_interval_s: float | None = 20.0
     """Keepalive pings detect a dead peer; websockets' default period."""
     ping_timeout_s: float | None = 20.0
+    auth_secret: SecretStr | None = Field(default_factory=auth_secret_from_env)
+    """rosauth secret: when set, an ``auth`` op is the first frame of every connection."""
+    cafile: Path | None = None
+    """For ``wss://``: trust this certificate (PEM) instead of the default store (which
+    ``SSL_CERT_FILE`` may also point at)."""
 
 
 @contextmanager
@@ -53,9 +77,17 @@ def translate_transport_error(context: str) -> Iterator[None]:
 
 
 async def open_once(url: str, config: TransportConfig, timeout_s: float) -> ClientConnection:
-    """One connection attempt; raises ``OSError``/``TimeoutError``/websockets errors as is."""
-    return await websockets.connect(
+    """One connection attempt; raises ``OSError``/``TimeoutError``/websockets errors as is.
+
+    For ``wss://`` the server certificate is checked against the default trust store, which
+    ``SSL_CERT_FILE`` may point at (``riverbridge up --certfile`` does).
+    """
+    options: dict[str, Any] = {}  # websockets refuses an explicit ssl=None for wss://
+    if config.cafile is not None and url.startswith("wss:"):
+        options["ssl"] = ssl.create_default_context(cafile=str(config.cafile))
+    ws = await websockets.connect(
         url,
+        **options,
         compression=None,
         max_size=config.max_frame_bytes,
         max_queue=config.max_queued_frames,
@@ -64,6 +96,11 @@ async def open_once(url: str, config: TransportConfig, timeout_s: float) -> Clie
         ping_timeout=config.ping_timeout_s,
         proxy=None,
     )
+    if config.auth_secret is not None:
+        host = urllib.parse.urlsplit(url).hostname or ""
+        op = rosauth.auth_op(config.auth_secret.get_secret_value(), time.time(), dest=host)
+        await ws.send(json.dumps(op))
+    return ws
 
 
 async def open_with_retry(url: str, config: TransportConfig, backoff: BackoffPolicy,

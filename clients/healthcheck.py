@@ -14,11 +14,13 @@ from __future__ import annotations
 import argparse
 import asyncio
 import json
+import ssl
 import sys
 import urllib.error
 import urllib.parse
 import urllib.request
 from collections.abc import Sequence
+from pathlib import Path
 from typing import Any
 
 from clients.client import RosbridgeClient
@@ -41,11 +43,16 @@ def version_url(bridge_url: str) -> str:
     return urllib.parse.urlunsplit((schemes[parts.scheme], parts.netloc, "/version", "", ""))
 
 
-def fetch_version(bridge_url: str, timeout_s: float = DEFAULT_TIMEOUT_S) -> dict[str, Any]:
-    """Blocking ``GET /version``; returns the JSON body. Raises :class:`Unhealthy`."""
+def fetch_version(bridge_url: str, timeout_s: float = DEFAULT_TIMEOUT_S,
+                  cafile: Path | None = None) -> dict[str, Any]:
+    """Blocking ``GET /version``; returns the JSON body. Raises :class:`Unhealthy`.
+
+    ``cafile``: for https, trust this certificate instead of the default store.
+    """
     url = version_url(bridge_url)
+    context = ssl.create_default_context(cafile=str(cafile)) if cafile is not None else None
     try:
-        with urllib.request.urlopen(url, timeout=timeout_s) as response:
+        with urllib.request.urlopen(url, timeout=timeout_s, context=context) as response:
             body = json.loads(response.read())
     except (OSError, ValueError) as exc:  # URLError, timeouts and refused connections are OSError
         raise Unhealthy(f"GET {url} failed: {exc}") from exc

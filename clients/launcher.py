@@ -14,8 +14,12 @@ Design (asyncio subprocesses, one event loop, no threads of our own):
   also tells the port when ``--port 0``), then ``GET /version``; the simulator and navigation
   are ready when every topic they publish has a publisher in ``/rosapi/publishers``
   (:mod:`clients.healthcheck`).
-- Whatever ends the run (a signal, a child exiting, a start-up timeout), every child gets
-  SIGINT, then SIGTERM and SIGKILL after ``stop_timeout_s`` each.
+- Once the stack is ready a component that dies is restarted (``restart``: on-failure by
+  default, :mod:`clients.restarts`) with backoff while the others keep running; the bridge
+  comes back on the same port and the clients reconnect to it. Each restart is logged and
+  counted on the latched ``/riverbridge/restarts`` topic (dashboard, ``GET /metrics``).
+- Whatever ends the run (a signal, a child exiting with ``restart never``, a start-up
+  timeout), every child gets SIGINT, then SIGTERM and SIGKILL after ``stop_timeout_s`` each.
 """
 
 from __future__ import annotations
@@ -29,16 +33,20 @@ import os
 import re
 import signal
 import sys
+import time
 from collections.abc import Awaitable, Callable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Literal, TextIO, TypeVar
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, SecretStr
 
 from clients.client import RosbridgeClient
+from clients.connection import AUTH_SECRET_ENV, TransportConfig
 from clients.errors import RosbridgeError
 from clients.healthcheck import Unhealthy, fetch_version, missing_publishers
+from clients.restarts import RestartBackoff, RestartLedger, RestartMode, RestartPolicy
+from schemas.rosauth import read_secret
 
 log = logging.getLogger(__name__)
 T = TypeVar("T")
@@ -59,8 +67,9 @@ MALLOC_ENV: Mapping[str, str] = {
     "MALLOC_TOP_PAD_": "67108864",
 }
 
-_LISTENING = re.compile(rb"listening on ws://(?P<host>\S+?):(?P<port>\d+)")
+_LISTENING = re.compile(rb"listening on wss?://(?P<host>\S+?):(?P<port>\d+)")
 _POLL_S = 0.25  # readiness probe period: cheap (one rosapi round trip per topic)
+_EXIT_POLL_S = 0.05  # how often a child's exit is looked for (see Child.wait)
 _LINE_LIMIT = 1 << 20  # longest log line read in one piece; longer ones are split
 _WILDCARD_TO_LOOPBACK = {"0.0.0.0": "127.0.0.1", "": "127.0.0.1", "::": "::1"}
 _COLOURS = {"bridge": "36", "sim": "32", "nav": "35", "up": "1"}  # ANSI: cyan, green, magenta
@@ -82,6 +91,34 @@ class LaunchConfig(BaseModel):
     startup_timeout_s: float = Field(default=120.0, gt=0)
     # Per escalation step (SIGINT, then SIGTERM, then SIGKILL); the parts stop in ~1 s.
     stop_timeout_s: float = Field(default=10.0, gt=0)
+    # What happens to a component that dies once the stack runs (clients.restarts).
+    restart: RestartMode = "on-failure"
+    # The bridge's access options (docs/bridge.md, "Security and hostile input"); with a
+    # secret or a certificate the simulator and navigation authenticate and trust it too.
+    auth_secret_file: Path | None = None
+    certfile: Path | None = None
+    keyfile: Path | None = None
+    allowed_origins: tuple[str, ...] = ()
+    max_clients: int | None = Field(default=None, gt=0)
+    # Extra bridge options (`riverbridge up --dds ...` passes its DDS options through).
+    bridge_args: tuple[str, ...] = ()
+
+    @property
+    def scheme(self) -> str:
+        return "wss" if self.certfile is not None else "ws"
+
+    def bridge_access_args(self) -> list[str]:
+        """The bridge's command-line options for the access settings."""
+        args: list[str] = []
+        for option, path in (("--auth-secret-file", self.auth_secret_file),
+                             ("--certfile", self.certfile), ("--keyfile", self.keyfile)):
+            if path is not None:
+                args += [option, str(path)]
+        if self.allowed_origins:
+            args += ["--allowed-origins", *self.allowed_origins]
+        if self.max_clients is not None:
+            args += ["--max-clients", str(self.max_clients)]
+        return args
 
 
 @dataclass(frozen=True)
@@ -110,7 +147,8 @@ def stack_components(config: LaunchConfig) -> tuple[Component, ...]:
         nav_args += ["--config", str(config.nav_config)]
     return (
         Component("bridge", "bridge", "bridge",
-                  ("--host", config.host, "--port", str(config.port))),
+                  ("--host", config.host, "--port", str(config.port),
+                   *config.bridge_access_args(), *config.bridge_args)),
         Component("sim", "simulator", "simulator", tuple(sim_args), SIMULATOR_TOPICS),
         Component("nav", "navigation", "navigation", tuple(nav_args), NAVIGATION_TOPICS),
     )
@@ -124,13 +162,38 @@ def child_environment(base: Mapping[str, str] | None = None) -> dict[str, str]:
     return env
 
 
+def access_environment(config: LaunchConfig) -> dict[str, str]:
+    """What the simulator and navigation need to use a secured bridge: the rosauth secret
+    file (clients.connection) and the bridge's certificate as their trust store."""
+    env = {}
+    if config.auth_secret_file is not None:
+        env[AUTH_SECRET_ENV] = str(config.auth_secret_file)
+    if config.certfile is not None:
+        env["SSL_CERT_FILE"] = str(config.certfile)
+    return env
+
+
+def client_transport(config: LaunchConfig) -> TransportConfig:
+    """The supervisor's own connections (readiness probe, restart counts) to the bridge."""
+    secret = (None if config.auth_secret_file is None
+              else SecretStr(read_secret(config.auth_secret_file)))
+    return TransportConfig(auth_secret=secret, cafile=config.certfile)
+
+
 def connect_host(host: str) -> str:
     """Where a local client connects to reach a server bound to ``host``."""
     return _WILDCARD_TO_LOOPBACK.get(host, host)
 
 
-def ws_url(host: str, port: int) -> str:
-    return f"ws://[{host}]:{port}" if ":" in host else f"ws://{host}:{port}"
+def ws_url(host: str, port: int, scheme: str = "ws") -> str:
+    return f"{scheme}://[{host}]:{port}" if ":" in host else f"{scheme}://{host}:{port}"
+
+
+def with_port(component: Component, port: int) -> Component:
+    """``component`` with the value after ``--port`` replaced by ``port``."""
+    args = list(component.args)
+    args[args.index("--port") + 1] = str(port)
+    return replace(component, args=tuple(args))
 
 
 def describe_exit(title: str, code: int) -> str:
@@ -144,9 +207,9 @@ def describe_exit(title: str, code: int) -> str:
 class ComponentDied(RuntimeError):
     """A component exited while the stack was starting or running."""
 
-    def __init__(self, title: str, code: int) -> None:
+    def __init__(self, title: str, code: int, child: Child | None = None) -> None:
         super().__init__(describe_exit(title, code))
-        self.title, self.code = title, code
+        self.title, self.code, self.child = title, code, child
 
 
 class StartupTimeout(RuntimeError):
@@ -229,6 +292,7 @@ class Child:
     output: PrefixedOutput
     port: asyncio.Future[int] = field(default_factory=lambda: asyncio.get_running_loop()
                                       .create_future())
+    started_s: float = field(default_factory=time.monotonic)
     _pump: asyncio.Task[None] | None = None
 
     @classmethod
@@ -262,8 +326,19 @@ class Child:
             self.output.write(self.component.name, line.decode("utf-8", "replace").rstrip())
 
     async def wait(self) -> int:
-        """Wait for the exit and for the last log line to be written; the exit code."""
-        code = await self.process.wait()
+        """Wait for the exit and for the last log line to be written; the exit code.
+
+        What the child left in its process group (navigation's LIDAR worker pool, after a
+        kill -9) is killed at once: it holds the output pipe, and its memory, for seconds
+        after the child is gone. ``Process.wait()`` (Python 3.11) waits for that pipe too, so
+        the exit is taken from ``returncode``, which is set the moment the child is reaped.
+        """
+        while self.process.returncode is None:
+            await asyncio.sleep(_EXIT_POLL_S)
+        code = self.process.returncode
+        with contextlib.suppress(ProcessLookupError, PermissionError):
+            os.killpg(self.pid, signal.SIGKILL)
+        await self.process.wait()
         if self._pump is not None:
             await asyncio.shield(self._pump)  # a cancelled waiter must not stop the pump
         return code
@@ -301,20 +376,27 @@ class Supervisor:
         self._bridge, *self._clients = components
         self._config = config
         self._output = output
-        self._env = child_environment(env)
+        self._env = {**child_environment(env), **access_environment(config)}
         self._on_ready = on_ready
         self.children: list[Child] = []
         self.url = ""
         self._missing: dict[str, tuple[str, ...]] = {}
+        self._policy = RestartPolicy(config.restart)
+        self._backoffs: dict[str, RestartBackoff] = {}
+        self.ledger = RestartLedger()
+        self._restarting: set[asyncio.Task[None]] = set()
+        self._changed = asyncio.Event()  # a restarted child joined `children`
+        self._bridge_port = 0
 
     async def run(self, stop: asyncio.Event) -> int:
-        """Run until ``stop`` is set (0) or a component dies or fails to start (1)."""
+        """Run until ``stop`` is set (0), or a component dies that the restart policy does
+        not restart, or one fails to start (1)."""
         status = 1
         try:
             await self._start(stop)
             if self._on_ready is not None:
                 self._on_ready(self.url)
-            await self._guard(stop.wait(), stop, timeout_s=None)
+            await self._supervise(stop)
             status = 0
         except StopRequested:
             status = 0
@@ -323,6 +405,10 @@ class Supervisor:
         except RosbridgeError as exc:  # the readiness probe lost the bridge
             log.error("cannot check readiness through %s: %s", self.url, exc)
         finally:
+            for task in self._restarting:
+                task.cancel()
+            await asyncio.gather(*self._restarting, return_exceptions=True)
+            await self.ledger.close()
             codes = await self._stop_all()
         unclean = {title: code for title, code in codes.items() if code != 0}
         if status == 0 and unclean:
@@ -336,7 +422,8 @@ class Supervisor:
         bridge = await self._spawn(self._bridge)
         port = await self._guard(asyncio.shield(bridge.port), stop, deadline,
                                  waiting_for=self._bridge.title)
-        self.url = ws_url(connect_host(self._config.host), port)
+        self._bridge_port = port
+        self.url = ws_url(connect_host(self._config.host), port, self._config.scheme)
         await self._guard(self._probe_version(), stop, deadline, waiting_for=self._bridge.title)
         log.info("%s ready at %s", self._bridge.title, self.url)
         for component in self._clients:
@@ -347,12 +434,56 @@ class Supervisor:
     async def _spawn(self, component: Component) -> Child:
         child = await Child.start(component, self.url, self._env, self._output)
         self.children.append(child)
+        self.ledger.started(component.title, child.pid)
         return child
+
+    # -- supervision once running ----------------------------------------------------------
+
+    async def _supervise(self, stop: asyncio.Event) -> None:
+        """Until ``stop``: restart components that die (per the policy); raise ComponentDied
+        for one that is not restarted."""
+        self._restarting.add(asyncio.create_task(self._attach_ledger(), name="up restarts"))
+        while True:
+            self._changed.clear()
+            try:
+                await self._guard(self._changed.wait(), stop, timeout_s=None)
+            except ComponentDied as died:
+                if died.child is None or not self._policy.restarts(died.code):
+                    raise
+                self._schedule_restart(died.child, died.code)
+
+    async def _attach_ledger(self) -> None:
+        try:
+            await self.ledger.attach(self.url, client_transport(self._config))
+        except RosbridgeError as exc:
+            log.warning("cannot publish restart counts through %s: %s", self.url, exc)
+
+    def _schedule_restart(self, child: Child, code: int) -> None:
+        title = child.component.title
+        self.children.remove(child)
+        count = self.ledger.died(title, describe_exit(title, code).removeprefix(title + " "))
+        backoff = self._backoffs.setdefault(title, RestartBackoff())
+        delay_s = backoff.next_delay(time.monotonic() - child.started_s)
+        log.warning("%s; restarting it in %g s (restart %d)", describe_exit(title, code),
+                    delay_s, count)
+        task = asyncio.create_task(self._restart(child.component, delay_s),
+                                   name=f"restart {title}")
+        self._restarting.add(task)
+        task.add_done_callback(self._restarting.discard)
+
+    async def _restart(self, component: Component, delay_s: float) -> None:
+        await asyncio.sleep(delay_s)
+        if component.name == self._bridge.name:  # same port: the clients reconnect to it
+            component = with_port(component, self._bridge_port)
+        await self._spawn(component)
+        self._changed.set()
+        await self.ledger.publish()
+
 
     async def _probe_version(self) -> None:
         while True:
             with contextlib.suppress(Unhealthy):
-                await asyncio.to_thread(fetch_version, self.url, 5.0)
+                await asyncio.to_thread(fetch_version, self.url, 5.0, self._config.certfile)
                 return
             await asyncio.sleep(_POLL_S)
 
@@ -360,8 +491,8 @@ class Supervisor:
         """Poll ``/rosapi/publishers`` until every client component's topics have one."""
         pending = {c.title: c.topics for c in self._clients}
         self._missing = dict(pending)
-        async with RosbridgeClient(self.url, encoding="json", name="up-probe",
-                                   reconnect=False) as probe:
+        async with RosbridgeClient(self.url, encoding="json", name="up-probe", reconnect=False,
+                                   transport=client_transport(self._config)) as probe:
             while pending:
                 for title, topics in list(pending.items()):
                     with contextlib.suppress(RosbridgeError, TimeoutError):
@@ -387,7 +518,7 @@ class Supervisor:
                                          return_when=asyncio.FIRST_COMPLETED)
             for exited, child in exits.items():
                 if exited in done:
-                    raise ComponentDied(child.component.title, exited.result())
+                    raise ComponentDied(child.component.title, exited.result(), child)
             if task in done:
                 return task.result()
             if stopping in done:
@@ -407,8 +538,8 @@ class Supervisor:
     async def _stop_all(self) -> dict[str, int]:
         """Stop the clients (together), then the bridge; exit code by component title."""
         timeout_s = self._config.stop_timeout_s
-        clients = [child for child in self.children if child.component is not self._bridge]
-        bridge = [child for child in self.children if child.component is self._bridge]
+        clients = [child for child in self.children if child.component.name != self._bridge.name]
+        bridge = [child for child in self.children if child.component.name == self._bridge.name]
         codes: dict[str, int] = {}
         for group in (clients, bridge):
             results = await asyncio.gather(*(child.stop(timeout_s) for child in group))

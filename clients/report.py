@@ -16,6 +16,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from clients.thesis import FIGURES
 from schemas.tracing import header_stamp_ns
 
 # Stages in path order: recorded spans plus the two hops between processes.
@@ -27,14 +28,11 @@ STEP_PREFIX = "process."
 
 SENSOR_TOPICS = ("/lidar/points", "/radar/image", "/camera/image/compressed", "/imu/data")
 
-# Thesis chapter 4 figures (tables 4.8-4.10, figures 4.1-4.4), for side-by-side columns.
-THESIS_TRANSPORT_MS = {"/lidar/points": 86.0, "/radar/image": 30.0,
-                       "/camera/image/compressed": 6.0, "/imu/data": 9.0}
-THESIS_NOTES = {"/imu/data": "outliers above 80 ms"}
-THESIS_STEPS_MS = {"dbscan": 29.0, "boxes": 186.0}  # table 4.8: DBSCAN 29 ms, boxes 186 ms
-THESIS_OVERHEAD = 5.5  # table 4.10: 1.62 MB/s on the wire for 291 KB/s of payload
+# The thesis's overhead (tables 4.9/4.10): 1.62 MB/s of network load for 291.27 KB/s of
+# sensor payload. Every other figure, with its statistic and source: clients.thesis.
+THESIS_OVERHEAD = 1.62e6 / 291.27e3
 THESIS_WIRE_BPS = 1.62e6
-THESIS_PAYLOAD_BPS = 291e3
+THESIS_PAYLOAD_BPS = 291.27e3
 
 NS_PER_MS = 1e6
 
@@ -140,12 +138,14 @@ def journeys(spans: Iterable[SpanRecord]) -> list[Journey]:
 def _add_end_to_end(journey: Journey, first: Mapping[str, SpanRecord],
                     group: Sequence[SpanRecord], subscriber: str) -> None:
     generate = first.get("generate")
-    if generate is None:
+    encode = first.get("encode")  # a replay (riverbridge play) has no generate: ready = encode
+    if generate is None and encode is None:
         return
+    ready_ns = generate.end_ns if generate is not None else encode.start_ns
     for stage, name in (("decode", TRANSPORT), ("process", RESULT)):
         end = next((s for s in group if s.stage == stage and s.process == subscriber), None)
         if end is not None:
-            journey.durations_ms[name] = _ms(generate.end_ns, end.end_ns)
+            journey.durations_ms[name] = _ms(ready_ns, end.end_ns)
 
 
 def percentiles(values_ms: Sequence[float]) -> dict[str, float]:
@@ -179,11 +179,14 @@ def topic_summary(topic: str, items: Sequence[Journey], duration_s: float) -> di
     wire_out = _median(j.wire_out_bytes for j in items)
     transport = stages.get(TRANSPORT, [])
     result = stages.get(RESULT, [])
+    payloads = {j.stamp_ns: j.payload_bytes for j in items if j.payload_bytes > 0}
     summary: dict[str, Any] = {
         "messages": len(stamps),
         "rate_hz": len(stamps) / duration_s if duration_s > 0 else math.nan,
         "period_ms": period_ms,
         "payload_bytes": payload, "wire_in_bytes": wire_in, "wire_out_bytes": wire_out,
+        # the thesis's table 4.9 averages 100 messages: the mean, once per message
+        "payload_bytes_mean": float(np.mean(list(payloads.values()))) if payloads else 0.0,
         "overhead_in": wire_in / payload if payload else math.nan,
         "overhead_out": wire_out / payload if payload else math.nan,
         "subscribers": sorted({j.subscriber for j in items if j.subscriber}),
@@ -211,15 +214,16 @@ def unprocessed(items: Sequence[Journey]) -> int:
 
 
 def thesis_figures(topic: str) -> dict[str, Any]:
-    """The thesis's figure for the same quantities (ms), where it has one."""
-    figures: dict[str, Any] = {}
-    if topic in THESIS_TRANSPORT_MS:
-        figures[TRANSPORT] = THESIS_TRANSPORT_MS[topic]
-        figures["overhead"] = THESIS_OVERHEAD
-    if topic in THESIS_NOTES:
-        figures["note"] = THESIS_NOTES[topic]
-    if topic == "/lidar/points":
-        figures.update({f"{STEP_PREFIX}{k}": v for k, v in THESIS_STEPS_MS.items()})
+    """The thesis's mean (Ø, table A.1) of a stage of ``topic``, per stage (ms), and where it
+    comes from: ``{"transport": 86.0, "sources": {"transport": "table A.1 5b"}, ...}``.
+    Stages whose thesis figure measured something else are listed under ``not_comparable``."""
+    figures: dict[str, Any] = {"statistic": "mean", "sources": {}, "not_comparable": []}
+    for figure in FIGURES:
+        if figure.topic == topic and figure.stage and figure.statistic == "mean":
+            figures[figure.stage] = figure.thesis
+            figures["sources"][figure.stage] = figure.source
+            if not figure.comparable:
+                figures["not_comparable"].append(figure.stage)
     return figures
 
 
@@ -271,27 +275,48 @@ def process_summary(stats: Iterable[Mapping[str, Any]]) -> dict[str, dict[str, A
     return out
 
 
-def network_summary(topics: Mapping[str, Mapping[str, Any]], loopback_bytes: int | None,
-                    duration_s: float) -> dict[str, Any]:
-    """Loopback load against the payload it carried, like the thesis's table 4.10.
+def _per_s(count: float | None, duration_s: float) -> float:
+    return count / duration_s if count is not None and duration_s > 0 else math.nan
 
-    Payload and publisher-side wire rates sum every traced topic (bytes x rate), and again the
-    four sensor streams alone: the thesis's 291 kB/s of payload (table 4.9) were those.
+
+def _over(num: float, den: float) -> float:
+    return num / den if den else math.nan
+
+
+def network_summary(topics: Mapping[str, Mapping[str, Any]], loopback_bytes: int | None,
+                    duration_s: float, sockets: Mapping[str, Any] | None = None) -> dict[str, Any]:
+    """The network load the thesis's way (table 4.10 over table 4.9) and the encoding ratio.
+
+    * ``stack_over_sensor_payload``: every byte the stack's TCP sockets sent in the window
+      (``sockets``, clients.sockets: each hop once, every op and telemetry batch, not the
+      report's own connection) over the payload of the four sensor streams (CDR bytes x
+      rate): the thesis's 1.62 MB/s over 291.27 KB/s. ``loopback_over_sensor_payload`` is
+      the same with ``lo``'s transmit counter, which also counts every other program here.
+    * ``sensor_wire_over_payload`` / ``wire_over_payload``: the encoding ratio, one hop's
+      websocket bytes over CDR bytes, for the four sensor streams and for all topics.
     """
     payload_bps = sum(t["payload_bytes"] * t["rate_hz"] for t in topics.values())
     wire_bps = sum(t["wire_in_bytes"] * t["rate_hz"] for t in topics.values())
     sensors = [t for name, t in topics.items() if name in SENSOR_TOPICS]
     sensor_payload_bps = sum(t["payload_bytes"] * t["rate_hz"] for t in sensors)
     sensor_wire_bps = sum(t["wire_in_bytes"] * t["rate_hz"] for t in sensors)
-    loopback_bps = loopback_bytes / duration_s if loopback_bytes is not None else math.nan
+    loopback_bps = _per_s(loopback_bytes, duration_s)
+    stack_bps = _per_s(sockets["stack_bytes"] if sockets else None, duration_s)
     return {"payload_bytes_per_s": payload_bps, "wire_in_bytes_per_s": wire_bps,
             "loopback_bytes_per_s": loopback_bps,
-            "wire_over_payload": wire_bps / payload_bps if payload_bps else math.nan,
-            "loopback_over_payload": loopback_bps / payload_bps if payload_bps else math.nan,
+            "wire_over_payload": _over(wire_bps, payload_bps),
+            "loopback_over_payload": _over(loopback_bps, payload_bps),
             "sensor_payload_bytes_per_s": sensor_payload_bps,
             "sensor_wire_in_bytes_per_s": sensor_wire_bps,
-            "sensor_wire_over_payload": (sensor_wire_bps / sensor_payload_bps
-                                         if sensor_payload_bps else math.nan),
+            "sensor_wire_over_payload": _over(sensor_wire_bps, sensor_payload_bps),
+            "stack_bytes_per_s": stack_bps,
+            "stack_over_sensor_payload": _over(stack_bps, sensor_payload_bps),
+            "loopback_over_sensor_payload": _over(loopback_bps, sensor_payload_bps),
+            "stack_bytes_per_s_by_process": {
+                name: _per_s(count, duration_s)
+                for name, count in (sockets or {}).get("by_process", {}).items()},
+            "report_connection_bytes_per_s": _per_s(
+                sockets["instrument_bytes"] if sockets else None, duration_s),
             "thesis": {"wire_bytes_per_s": THESIS_WIRE_BPS,
                        "payload_bytes_per_s": THESIS_PAYLOAD_BPS, "overhead": THESIS_OVERHEAD}}
 
@@ -311,22 +336,9 @@ def loopback_tx_bytes(proc_net_dev: str, interface: str = "lo") -> int | None:
     return None
 
 
-# -- tables -----------------------------------------------------------------------------------
+# -- order of stages -------------------------------------------------------------------------
 
 ROW_ORDER = (*STAGES, TRANSPORT, RESULT)
-
-
-def _fmt_bytes(count: float) -> str:
-    if not count or math.isnan(count):
-        return "-"
-    for unit, size in (("MB", 1e6), ("kB", 1e3)):
-        if count >= size:
-            return f"{count / size:.2f} {unit}"
-    return f"{count:.0f} B"
-
-
-def _fmt_ms(value: float | None) -> str:
-    return "-" if value is None or math.isnan(value) else f"{value:.2f}"
 
 
 def stage_order(names: Iterable[str]) -> list[str]:
@@ -334,113 +346,3 @@ def stage_order(names: Iterable[str]) -> list[str]:
     present = set(names)
     return [s for s in ROW_ORDER if s in present] + sorted(
         s for s in present if s not in ROW_ORDER)
-
-
-def _stage_rows(topic: str, summary: Mapping[str, Any]) -> list[str]:
-    stages = summary["stages"]
-    thesis = summary["thesis"]
-    names = stage_order(stages)
-    rows = []
-    for stage in names:
-        p = stages[stage]
-        if not p.get("n"):
-            continue
-        figure = thesis.get(stage)
-        note = f"thesis {figure:g} ms" if figure is not None else ""
-        if stage == TRANSPORT and "note" in thesis:
-            note += f" ({thesis['note']})"
-        if stage == TRANSPORT:
-            note += f"; misses {summary['deadline_misses']}/{p['n']}"
-        if stage == RESULT:
-            note += (f"misses {summary['result_deadline_misses']}/{p['n']}, "
-                     f"unprocessed {summary['unprocessed']}")
-        rows.append(f"    {stage:<16}{p['n']:>6}{_fmt_ms(p['p50']):>9}{_fmt_ms(p['p90']):>9}"
-                    f"{_fmt_ms(p['p99']):>9}{_fmt_ms(p['max']):>9}   {note}")
-    return rows
-
-
-def render_run(run: Mapping[str, Any]) -> str:
-    """The human-readable report of one run (one encoding)."""
-    hosts = run.get("hosts", [])
-    lines = [f"== {run['encoding']}: {run['duration_s']:.1f} s measured on "
-             f"{', '.join(hosts) or 'unknown host'}"
-             + (" (HOSTS DIFFER: cross-process hops are not comparable)" if len(hosts) > 1
-                else "")]
-    machine = run.get("machine")
-    if machine:
-        load = machine["load_average_1_5_15"]
-        lines.append(f"   machine: {machine['cpus']} CPUs, load average {load[0]:.1f} / "
-                     f"{load[1]:.1f} / {load[2]:.1f} (1/5/15 min) at the window's end")
-    for topic, summary in run["topics"].items():
-        payload = summary["payload_bytes"]
-        sample = run.get("samples", {}).get(topic, "")
-        lines.append(
-            f"{topic}  {summary['rate_hz']:.1f} Hz (period {_fmt_ms(summary['period_ms'])} ms)"
-            f"  payload {_fmt_bytes(payload)}  wire in {_fmt_bytes(summary['wire_in_bytes'])}"
-            f" / out {_fmt_bytes(summary['wire_out_bytes'])}  overhead "
-            f"{summary['overhead_in']:.3f}x (thesis {THESIS_OVERHEAD:g}x)"
-            + (f"  [{sample}]" if sample else ""))
-        if summary["stages"]:
-            lines.append(f"    {'stage (ms)':<16}{'n':>6}{'p50':>9}{'p90':>9}{'p99':>9}"
-                         f"{'max':>9}")
-            lines += _stage_rows(topic, summary)
-    lines += _process_rows(run.get("processes", {}))
-    lines += _network_rows(run.get("network", {}))
-    return "\n".join(lines)
-
-
-def _process_rows(processes: Mapping[str, Mapping[str, Any]]) -> list[str]:
-    if not processes:
-        return []
-    rows = [f"  {'process':<14}{'cpu % mean':>11}{'cpu % max':>10}{'rss max':>11}"
-            f"{'msgs out':>10}{'msgs in':>9}{'dropped':>9}"]
-    for name, p in processes.items():
-        rows.append(f"  {name:<14}{p['cpu_percent_mean']:>11.1f}{p['cpu_percent_max']:>10.1f}"
-                    f"{_fmt_bytes(p['rss_bytes_max']):>11}{p['messages_out']:>10}"
-                    f"{p['messages_in']:>9}{p['dropped']:>9}")
-    return rows
-
-
-def _network_rows(network: Mapping[str, Any]) -> list[str]:
-    if not network:
-        return []
-    return [f"  network: payload {_fmt_bytes(network['payload_bytes_per_s'])}/s, wire "
-            f"{_fmt_bytes(network['wire_in_bytes_per_s'])}/s "
-            f"({network['wire_over_payload']:.3f}x), loopback "
-            f"{_fmt_bytes(network['loopback_bytes_per_s'])}/s "
-            f"({network['loopback_over_payload']:.2f}x); thesis 1.62 MB/s wire for 291 kB/s "
-            f"payload ({THESIS_OVERHEAD:g}x)",
-            f"  sensor streams ({', '.join(SENSOR_TOPICS)}): payload "
-            f"{_fmt_bytes(network.get('sensor_payload_bytes_per_s', math.nan))}/s, wire "
-            f"{_fmt_bytes(network.get('sensor_wire_in_bytes_per_s', math.nan))}/s "
-            f"({network.get('sensor_wire_over_payload', math.nan):.3f}x)"]
-
-
-def render_comparison(runs: Sequence[Mapping[str, Any]]) -> str:
-    """One table comparing the runs' transport latency and overhead per sensor topic."""
-    header = f"{'topic':<26}{'quantity':<18}" + "".join(f"{r['encoding']:>12}" for r in runs)
-    lines = [header + f"{'thesis':>12}"]
-    topics = [t for t in SENSOR_TOPICS if any(t in r["topics"] for r in runs)]
-    for topic in topics:
-        for quantity, pick in (("transport p50 ms", ("p50", TRANSPORT)),
-                               ("transport p99 ms", ("p99", TRANSPORT)),
-                               ("transport max ms", ("max", TRANSPORT)),
-                               ("result p50 ms", ("p50", RESULT))):
-            key, stage = pick
-            cells = [r["topics"].get(topic, {}).get("stages", {}).get(stage, {}).get(key)
-                     for r in runs]
-            if all(c is None for c in cells):
-                continue
-            figure = THESIS_TRANSPORT_MS.get(topic) if stage == TRANSPORT and key == "p50" \
-                else None
-            lines.append(f"{topic:<26}{quantity:<18}" + "".join(f"{_fmt_ms(c):>12}" for c in cells)
-                         + f"{(f'{figure:g} avg' if figure else ''):>12}")
-        overheads = [r["topics"].get(topic, {}).get("overhead_in", math.nan) for r in runs]
-        lines.append(f"{topic:<26}{'wire/payload':<18}"
-                     + "".join(f"{o:>12.3f}" for o in overheads) + f"{THESIS_OVERHEAD:>12g}")
-    for label, key in (("sensor streams", "sensor_wire_over_payload"),
-                       ("all topics", "wire_over_payload")):
-        ratios = [r.get("network", {}).get(key, math.nan) for r in runs]
-        lines.append(f"{label:<26}{'wire/payload':<18}"
-                     + "".join(f"{o:>12.3f}" for o in ratios) + f"{THESIS_OVERHEAD:>12g}")
-    return "\n".join(lines)

@@ -1,11 +1,17 @@
 """``riverbridge report``: run the stack (or attach to one) and report where time and bytes go.
 
-For each encoding (``--encoding json,cbor`` runs them in turn) it starts bridge, simulator and
-navigation through :class:`clients.launcher.Supervisor`, lets them warm up, then reads
-``/riverbridge/trace`` and ``/riverbridge/process_stats`` for ``--duration`` seconds as an
-ordinary rosbridge client, asks the bridge's ``/riverbridge/stats`` and samples ``lo``'s
-counters. It prints per topic rate, bytes, overhead and p50/p90/p99/max per stage next to the
-thesis's figures (stdout), shows progress on stderr, and can write ``--json`` and ``--plots``.
+For each payload profile and encoding (``--profile default,thesis --encoding cbor,json`` runs
+the four in turn) it starts bridge, simulator and navigation through
+:class:`clients.launcher.Supervisor`, lets them warm up, then reads ``/riverbridge/trace`` and
+``/riverbridge/process_stats`` for ``--duration`` seconds as an ordinary rosbridge client,
+together with navigation's outputs and the simulator's ground truth; it asks the bridge's
+``/riverbridge/stats`` and reads the kernel's byte counters of the stack's sockets and of
+``lo`` at the window's start and end. It prints per topic rate, bytes, the mean and
+p50/p90/p99/max per stage beside the thesis's figures, the network overhead the thesis's way,
+and navigation's detection quality (stdout; docs/report.md, docs/quality.md), shows progress on
+stderr, and can write ``--json`` and ``--plots``. ``--record FILE`` also records every topic
+into an MCAP file; ``--replay FILE`` measures the bridge and navigation on a recording, with a
+player (clients.recording) in the simulator's place (docs/recording.md).
 
 Exit codes: 0 report written; 1 the stack failed or nothing was measured; 2 bad options.
 """
@@ -22,6 +28,7 @@ import os
 import sys
 import tempfile
 import time
+import tomllib
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any, TextIO
@@ -30,7 +37,23 @@ import numpy as np
 
 from clients.client import RosbridgeClient
 from clients.errors import RosbridgeError
-from clients.launcher import LaunchConfig, PrefixedOutput, Supervisor, stack_components
+from clients.launcher import (
+    SIMULATOR_TOPICS,
+    LaunchConfig,
+    PrefixedOutput,
+    Supervisor,
+    stack_components,
+)
+from clients.quality import lidar_quality, pair_by_stamp, radar_quality
+from clients.recording.components import (
+    player_component,
+    record_path,
+    recorder_component,
+    recorder_process,
+)
+from clients.recording.play_cli import recording_file
+from clients.recording.reading import recorded_topics
+from clients.recording.record_cli import output_file
 from clients.report import (
     SENSOR_TOPICS,
     SpanRecord,
@@ -40,13 +63,14 @@ from clients.report import (
     loopback_tx_bytes,
     network_summary,
     process_summary,
-    render_comparison,
-    render_run,
     spans_of_batch,
-    stage_order,
     stage_values,
     topic_summary,
 )
+from clients.report_plots import write_plots
+from clients.report_text import render_comparison, render_run, run_label
+from clients.sockets import SS_COMMAND, SocketBytes, parse_ss, window_traffic
+from clients.thesis import thesis_comparison
 from clients.up_cli import positive_seconds
 from schemas.tracing import (
     NS_PER_S,
@@ -69,6 +93,15 @@ SAMPLE_TYPES = {"/lidar/points": "sensor_msgs/msg/PointCloud2",
                 "/radar/image": "riverbridge_msgs/msg/RadarImage",
                 "/camera/image/compressed": "sensor_msgs/msg/CompressedImage",
                 "/imu/data": "sensor_msgs/msg/Imu"}
+PROFILES = ("default", "thesis")  # simulator payload profiles (simulator.config.PROFILES)
+STACK_PROCESSES = ("bridge", "simulator", "navigation")
+# What the detection quality reads (docs/quality.md): the truth and navigation's outputs.
+TRUTH_TYPE = "riverbridge_msgs/msg/GroundTruthArray"
+QUALITY_TOPICS = {"lidar_truth": ("/sim/ground_truth/lidar", TRUTH_TYPE),
+                  "radar_truth": ("/sim/ground_truth/radar", TRUTH_TYPE),
+                  "boxes": ("/nav/boxes", "riverbridge_msgs/msg/BoxArray"),
+                  "radar": ("/nav/radar_detections", "riverbridge_msgs/msg/RadarDetectionArray")}
+SIM_CONFIG = ("/sim/config", "std_msgs/msg/String")
 
 
 # --------------------------------------------------------------------------- progress
@@ -108,6 +141,27 @@ def read_loopback() -> int | None:
         return None
 
 
+async def read_sockets() -> list[SocketBytes] | None:
+    """The kernel's byte counters of every established TCP socket (``ss``), None without
+    ``ss`` (iproute2)."""
+    try:
+        process = await asyncio.create_subprocess_exec(
+            *SS_COMMAND, stdout=asyncio.subprocess.PIPE, stderr=asyncio.subprocess.DEVNULL)
+    except OSError:
+        return None
+    out, _ = await process.communicate()
+    return parse_ss(out.decode(errors="replace")) if process.returncode == 0 else None
+
+
+def stack_sockets(before: list[SocketBytes] | None, after: list[SocketBytes] | None,
+                  processes: dict[str, dict[str, Any]]) -> dict[str, Any] | None:
+    """What the stack's processes' sockets sent in the window (clients.sockets)."""
+    if before is None or after is None:
+        return None
+    pids = {int(p["pid"]): name for name, p in processes.items() if name in STACK_PROCESSES}
+    return window_traffic(before, after, pids, [os.getpid()])
+
+
 def describe_sample(topic: str, msg: dict[str, Any]) -> str:
     """The payload of one sensor message in words (points per scan, cells, bytes)."""
     if topic == "/lidar/points":
@@ -133,29 +187,67 @@ async def sample_payloads(client: RosbridgeClient, timeout_s: float = 3.0) -> di
 
 
 async def measure(url: str, encoding: str, duration_s: float, warmup_s: float,
-                  progress: Progress) -> dict[str, Any]:
+                  progress: Progress, profile: str | None = None) -> dict[str, Any]:
     """Read the telemetry of the stack at ``url`` for ``duration_s`` after ``warmup_s``."""
+    label = encoding if profile in (None, "default") else f"{profile}/{encoding}"
     async with RosbridgeClient(url, encoding="cbor", name="report", reconnect=False,
                                connect_timeout=3.0) as client:
         trace = await client.subscribe(TRACE_TOPIC, TRACE_TYPE, maxsize=100_000)
         stats = await client.subscribe(STATS_TOPIC, STATS_TYPE, maxsize=100_000)
-        await _wait(warmup_s, f"{encoding} warm-up", progress)
-        start_ns, lo_start = time.time_ns(), read_loopback()
-        await _wait(duration_s, f"{encoding} measuring", progress)
-        end_ns, lo_end = time.time_ns(), read_loopback()
+        quality = {key: await client.subscribe(topic, type_name, maxsize=1000)
+                   for key, (topic, type_name) in QUALITY_TOPICS.items()}
+        sim_config = await client.subscribe(*SIM_CONFIG, maxsize=1)
+        await _wait(warmup_s, f"{label} warm-up", progress)
+        for sub in quality.values():
+            _drain(sub)  # judge only what falls in the window
+        start_ns, lo_start, ss_start = time.time_ns(), read_loopback(), await read_sockets()
+        await _wait(duration_s, f"{label} measuring", progress)
+        end_ns, lo_end, ss_end = time.time_ns(), read_loopback(), await read_sockets()
         load = os.getloadavg()
-        await _wait(TAIL_S, f"{encoding} collecting", progress)
+        await _wait(TAIL_S, f"{label} collecting", progress)
         bridge_stats = await client.call_service(STATS_SERVICE, type=STATS_SERVICE_TYPE)
         spans = [s for batch in _drain(trace) for s in spans_of_batch(batch)
                  if start_ns <= s.stamp_ns <= end_ns]
         process_stats = [m for m in _drain(stats)
                          if start_ns <= (header_stamp_ns(m) or 0) <= end_ns + TAIL_S * NS_PER_S]
+        judged = {key: [m for m in _drain(sub) if start_ns <= (header_stamp_ns(m) or 0) <= end_ns]
+                  for key, sub in quality.items()}
+        config = _drain(sim_config)
         samples = await sample_payloads(client)
     lo_bytes = lo_end - lo_start if lo_start is not None and lo_end is not None else None
     run = build_run(encoding, spans, process_stats, bridge_stats, samples,
                     (end_ns - start_ns) / NS_PER_S, lo_bytes)
+    run["network"] = network_summary(run["topics"], lo_bytes, run["duration_s"],
+                                     stack_sockets(ss_start, ss_end, run["processes"]))
     run["machine"] = {"cpus": os.cpu_count(), "load_average_1_5_15": list(load)}
+    run["detection_quality"] = detection_quality(judged)
+    run.update(simulator_settings(config[-1] if config else None, profile))
+    run["thesis_comparison"] = thesis_comparison(run)
     return run
+
+
+def detection_quality(judged: dict[str, list[dict[str, Any]]]) -> dict[str, Any]:
+    """Precision and recall of LIDAR boxes and radar targets (clients.quality)."""
+    lidar = pair_by_stamp(judged["lidar_truth"], judged["boxes"])
+    radar = pair_by_stamp(judged["radar_truth"], judged["radar"])
+    quality: dict[str, Any] = {}
+    if lidar:
+        quality["lidar"] = lidar_quality(lidar)
+    if radar:
+        quality["radar"] = radar_quality(radar)
+    return quality
+
+
+def simulator_settings(config_msg: dict[str, Any] | None, profile: str | None) -> dict[str, Any]:
+    """The profile and LIDAR water model the simulator ran with (its latched /sim/config)."""
+    try:
+        config = json.loads(config_msg["data"]) if config_msg else {}
+    except (KeyError, TypeError, ValueError):
+        config = {}
+    lidar = config.get("lidar", {})
+    return {"profile": config.get("profile", profile or "unknown"),
+            "water_model": lidar.get("water_model", "unknown"),
+            "point_fields": lidar.get("point_fields", "unknown")}
 
 
 def build_run(encoding: str, spans: list[SpanRecord], process_stats: list[dict[str, Any]],
@@ -189,30 +281,55 @@ async def _wait(seconds: float, label: str, progress: Progress) -> None:
     progress.message(f"{label}: done")
 
 
+def profile_sim_config(profile: str, sim_config: Path | None, folder: Path) -> Path | None:
+    """The simulator config for ``profile``: ``sim_config`` itself for the default profile,
+    else a copy in ``folder`` that starts with ``profile = "..."`` (the file's own settings
+    still win over the profile's, simulator.config)."""
+    if profile == "default":
+        return sim_config
+    text = sim_config.read_text(encoding="utf-8") if sim_config else ""
+    path = folder / f"sim-{profile}.toml"
+    path.write_text(f'profile = "{profile}"\n' + text, encoding="utf-8")
+    return path
+
+
 async def run_stack(encoding: str, args: argparse.Namespace, progress: Progress,
-                    log_stream: TextIO) -> dict[str, Any]:
-    """Start the stack with ``encoding``, measure it, stop it. Raises RuntimeError."""
-    config = LaunchConfig(port=0, encoding=encoding, sim_config=args.sim_config,
+                    log_stream: TextIO, profile: str = "default",
+                    sim_config: Path | None = None) -> dict[str, Any]:
+    """Start the stack with ``encoding`` and the simulator's ``sim_config``, measure it,
+    stop it. Raises RuntimeError."""
+    config = LaunchConfig(port=0, encoding=encoding, sim_config=sim_config,
                           nav_config=args.nav_config, startup_timeout_s=args.startup_timeout)
     stop = asyncio.Event()
     measuring: list[asyncio.Task[dict[str, Any]]] = []
+    label = encoding if profile == "default" else f"{profile}/{encoding}"
 
     def on_ready(url: str) -> None:
-        progress.message(f"{encoding}: stack ready at {url}")
-        task = asyncio.create_task(measure(url, encoding, args.duration, args.warmup, progress))
+        progress.message(f"{label}: stack ready at {url}")
+        name = f"{encoding} replay" if args.replay is not None else encoding
+        task = asyncio.create_task(measure(url, name, args.duration, args.warmup, progress,
+                                           profile))
         task.add_done_callback(lambda _: stop.set())
         measuring.append(task)
 
-    progress.message(f"{encoding}: starting bridge, simulator and navigation")
-    supervisor = Supervisor(stack_components(config), config,
+    components = stack_components(config)
+    if args.replay is not None:  # the recording's sensor topics in the simulator's place
+        bridge, _simulator, navigation = components
+        components = (bridge, player_component(args.replay, args.replay_topics), navigation)
+    if args.record is not None:
+        runs = len(args.encoding) * len(args.profile)
+        components += (recorder_component(record_path(args.record, label.replace("/", "-"),
+                                                      runs)),)
+    progress.message(f"{label}: starting " + ", ".join(c.title for c in components))
+    supervisor = Supervisor(components, config,
                             PrefixedOutput(log_stream, colour=False), on_ready=on_ready)
     status = await supervisor.run(stop)
     if not measuring:
-        raise RuntimeError(f"the {encoding} stack did not start (exit status {status})")
+        raise RuntimeError(f"the {label} stack did not start (exit status {status})")
     task = measuring[0]
     if not task.done():
         task.cancel()
-        raise RuntimeError(f"the {encoding} stack stopped during the measurement")
+        raise RuntimeError(f"the {label} stack stopped during the measurement")
     return task.result()
 
 
@@ -232,69 +349,21 @@ def json_ready(value: Any) -> Any:
     return value
 
 
-def write_plots(runs: list[dict[str, Any]], folder: Path) -> list[Path]:
-    """Box plots per topic and stage (like thesis figures 4.1-4.4) and a bytes chart."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    from matplotlib import pyplot as plt
-
-    folder.mkdir(parents=True, exist_ok=True)
-    written = []
-    for run in runs:
-        for topic, values in run["_values"].items():
-            stages = stage_order(s for s in values if values[s])
-            if not stages:
-                continue
-            sample = run["samples"].get(topic, "")
-            fig, ax = plt.subplots(figsize=(max(6.0, 0.8 * len(stages)), 4.5))
-            ax.boxplot([values[s] for s in stages], showfliers=True)
-            ax.set_xticks(range(1, len(stages) + 1), stages, rotation=45, ha="right")
-            ax.set_ylabel("ms")
-            ax.set_title(f"{topic} ({run['encoding']}) {sample}")
-            ax.grid(axis="y", alpha=0.3)
-            fig.tight_layout()
-            path = folder / f"{run['encoding']}{topic.replace('/', '_')}.png"
-            fig.savefig(path, dpi=100)
-            plt.close(fig)
-            written.append(path)
-    written.append(_bytes_chart(runs, folder, plt))
-    return written
-
-
-def _bytes_chart(runs: list[dict[str, Any]], folder: Path, plt: Any) -> Path:
-    topics = sorted({t for run in runs for t in run["topics"]})
-    fig, ax = plt.subplots(figsize=(max(7.0, 1.1 * len(topics)), 4.5))
-    width = 0.8 / (1 + 2 * len(runs))
-    positions = list(range(len(topics)))
-    first = runs[0]["topics"]
-    ax.bar([p for p in positions], [first[t]["payload_bytes"] if t in first else 0
-                                    for t in topics], width, label="payload (CDR)")
-    for k, run in enumerate(runs, start=1):
-        ax.bar([p + k * width for p in positions],
-               [run["topics"].get(t, {}).get("wire_in_bytes", 0) for t in topics], width,
-               label=f"wire ({run['encoding']})")
-    ax.set_yscale("log")
-    ax.set_xticks([p + width * len(runs) / 2 for p in positions], topics, rotation=30,
-                  ha="right")
-    ax.set_ylabel("bytes per message")
-    ax.legend()
-    fig.tight_layout()
-    path = folder / "bytes.png"
-    fig.savefig(path, dpi=100)
-    plt.close(fig)
-    return path
-
-
 # --------------------------------------------------------------------------- CLI
 
 
-def _encodings(text: str) -> tuple[str, ...]:
-    names = tuple(name.strip() for name in text.split(",") if name.strip())
-    unknown = [name for name in names if name not in ENCODINGS]
-    if not names or unknown:
-        raise argparse.ArgumentTypeError(f"choose from {', '.join(ENCODINGS)}, got {text!r}")
-    return names
+def _choices(allowed: tuple[str, ...]) -> Callable[[str], tuple[str, ...]]:
+    """A comma-separated list of names from ``allowed``, for argparse."""
+    def parse(text: str) -> tuple[str, ...]:
+        names = tuple(name.strip() for name in text.split(",") if name.strip())
+        unknown = [name for name in names if name not in allowed]
+        if not names or unknown:
+            raise argparse.ArgumentTypeError(f"choose from {', '.join(allowed)}, got {text!r}")
+        return names
+    return parse
+
+
+_encodings = _choices(ENCODINGS)
 
 
 def _existing_file(text: str) -> Path:
@@ -315,6 +384,10 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--encoding", type=_encodings, default=("cbor",), metavar="LIST",
                         help="comma-separated encodings to run in turn: json, cbor "
                         "(default cbor; ignored with --bridge)")
+    parser.add_argument("--profile", type=_choices(PROFILES), default=("default",),
+                        metavar="LIST", help="comma-separated simulator payload profiles to run "
+                        "in turn: default, thesis (the thesis's LIDAR payload, docs/report.md; "
+                        "default: default; ignored with --bridge)")
     parser.add_argument("--bridge", metavar="URL",
                         help="attach to the running stack at ws://HOST:PORT instead")
     parser.add_argument("--json", type=Path, metavar="FILE", help="write everything as JSON")
@@ -324,6 +397,12 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--startup-timeout", type=positive_seconds, default=120.0, metavar="S")
     parser.add_argument("--log", type=Path, metavar="FILE",
                         help="where the stack's logs go (default: a file in the temp folder)")
+    parser.add_argument("--record", type=output_file, metavar="FILE.mcap",
+                        help="also record every topic into this MCAP file (one file per "
+                        "encoding, FILE.<encoding>.mcap, when several run)")
+    parser.add_argument("--replay", type=recording_file, metavar="FILE.mcap",
+                        help="measure on a recording: bridge, navigation and a player of the "
+                        "recording's sensor topics (looped), no simulator")
     return parser
 
 
@@ -334,6 +413,19 @@ def check_paths(parser: argparse.ArgumentParser, args: argparse.Namespace) -> No
     for option, path in (("--json", args.json), ("--log", args.log)):
         if path is not None and (path.is_dir() or not path.parent.is_dir()):
             parser.error(f"argument {option}: cannot write {path}")
+    if args.sim_config is not None and "default" not in args.profile and _sets_profile(
+            args.sim_config):
+        parser.error(f"argument --profile: {args.sim_config} sets profile itself; drop one")
+    if args.replay is not None:
+        if args.bridge is not None:
+            parser.error("argument --replay: starts its own stack; leave out --bridge")
+        if tuple(args.profile) != ("default",):
+            parser.error("argument --replay: the recording sets the payload; leave out "
+                         "--profile")
+        args.replay_topics = [t for t in SIMULATOR_TOPICS if t in recorded_topics(args.replay)]
+        if not args.replay_topics:
+            parser.error(f"argument --replay: {args.replay} has none of the simulator's "
+                         f"topics ({', '.join(SIMULATOR_TOPICS)})")
     if args.plots is not None:
         try:
             args.plots.mkdir(parents=True, exist_ok=True)
@@ -341,11 +433,32 @@ def check_paths(parser: argparse.ArgumentParser, args: argparse.Namespace) -> No
             parser.error(f"argument --plots: cannot create {args.plots}: {exc.strerror}")
 
 
+def _sets_profile(path: Path) -> bool:
+    """Whether a TOML file sets the top-level ``profile`` (unreadable files: the simulator
+    names the problem when it loads them)."""
+    try:
+        with path.open("rb") as stream:
+            return "profile" in tomllib.load(stream)
+    except (OSError, tomllib.TOMLDecodeError):
+        return False
+
+
 async def _run_all(args: argparse.Namespace, progress: Progress,
                    log_stream: TextIO) -> list[dict[str, Any]]:
     if args.bridge is not None:
-        return [await measure(args.bridge, "attached", args.duration, args.warmup, progress)]
-    return [await run_stack(encoding, args, progress, log_stream) for encoding in args.encoding]
+        if args.record is None:
+            return [await measure(args.bridge, "attached", args.duration, args.warmup,
+                                  progress)]
+        async with recorder_process(args.bridge, args.record):
+            return [await measure(args.bridge, "attached", args.duration, args.warmup,
+                                  progress)]
+    runs = []
+    with tempfile.TemporaryDirectory(prefix="riverbridge-report-") as folder:
+        for profile in args.profile:
+            sim_config = profile_sim_config(profile, args.sim_config, Path(folder))
+            runs += [await run_stack(encoding, args, progress, log_stream, profile, sim_config)
+                     for encoding in args.encoding]
+    return runs
 
 
 def main(argv: list[str] | None = None, *, stdout: TextIO | None = None,
@@ -371,12 +484,20 @@ def main(argv: list[str] | None = None, *, stdout: TextIO | None = None,
 def _emit(runs: list[dict[str, Any]], args: argparse.Namespace, out: TextIO,
           progress: Progress) -> int:
     write: Callable[[str], Any] = out.write
+    if args.replay is not None:
+        write(f"REPLAY of {args.replay}: {', '.join(args.replay_topics)} played from the "
+              "recording (looped, header stamps shifted to capture time on today's clock); "
+              "no simulator ran, so there is no generate stage.\n\n")
     for run in runs:
         write(render_run(run) + "\n\n")
     if len(runs) > 1:
         write(render_comparison(runs) + "\n")
     if args.json is not None:
-        document = {"runs": json_ready(runs), "sensor_topics": list(SENSOR_TOPICS)}
+        document = {"runs": json_ready(runs), "sensor_topics": list(SENSOR_TOPICS),
+                    # one list over all runs, each row tagged with its run (docs/report.md)
+                    "thesis_comparison": [{"run": run_label(run), **row} for run in runs
+                                          for row in json_ready(run["thesis_comparison"])],
+                    "replay": str(args.replay) if args.replay is not None else None}
         args.json.write_text(json.dumps(document, indent=1), encoding="utf-8")
         progress.message(f"wrote {args.json}")
     if args.plots is not None:

@@ -1,7 +1,8 @@
 """Configuration of the navigation service: frozen pydantic models, loadable from TOML.
 
 Defaults are the thesis values (tables 4.2, 4.3, 4.4, 4.6) where the thesis gives one; the
-remaining values are ours and their comment says why. ``extra="forbid"`` makes a misspelt
+remaining values are ours and their comment says why. config/nav.toml lists every field with
+its default and source. ``extra="forbid"`` makes a misspelt
 field fail loudly with its name instead of being silently ignored.
 """
 
@@ -16,6 +17,7 @@ from pydantic import BaseModel, ConfigDict, Field, model_validator
 ClusterMethod = Literal["dbscan", "kmeans", "birch"]
 LidarWorkerKind = Literal["process", "thread"]
 CfarKind = Literal["ca", "soca", "goca", "os"]
+CfarAxis = Literal["azimuth", "range"]
 
 
 class _Frozen(BaseModel):
@@ -42,7 +44,7 @@ class LidarConfig(_Frozen):
     """LIDAR obstacle extraction (thesis 2.4, 3.5.3, tables 4.3 and 4.4)."""
 
     range_min_m: float = 1.5  # drops returns from the own hull and mast
-    range_max_m: float = 100.0  # thesis 4.1: obstacle detection of interest within ~100 m
+    range_max_m: float = 100.0  # thesis 3.3.1: the Velodyne Puck's range, up to 100 m
     ground: GroundConfig = GroundConfig()
     # Voxel edge; 0 disables. 0.2 m keeps the same 54 clusters as the full cloud in
     # performance-measurements §2(e) at a fifth of the DBSCAN time.
@@ -81,17 +83,25 @@ class LidarConfig(_Frozen):
 
 
 class CfarConfig(_Frozen):
-    """Radar CFAR detector (thesis 2.5, table 4.2).
+    """Radar CFAR detector (thesis 2.5, table 4.2) and the grouping of its cells into targets.
 
     Thesis 4.1 reads table 4.2 as totals: "A total of 100 cells are taken into consideration
-    ... Ten cells that are five to the right and five to the left of the CUT are ignored", so
-    100 training and 10 guard cells are 50 and 5 on each side of the cell under test.
+    ... Ten cells that are five to the right and five to the left of the CUT are ignored": 50
+    training and 5 guard cells on each side of the cell under test. That window spans 111
+    cells, and the thesis radar has 25 range cells (table 4.1: 100 m of 4 m cells) and 72
+    beams (5 deg), so it fits neither axis. The window here runs along azimuth (the ring of 72
+    beams at the CUT's range, see navigation.cfar and docs/quality.md) with table 4.2's 5
+    guard cells per side and the 30 training cells per side that the ring holds beside them
+    (72 - 1 - 2 x 5 = 61). A window that does not fit the image is an error naming these
+    fields, not a silently smaller window.
     """
 
     detector: CfarKind = "soca"  # thesis 3.5.3 uses SOCA-CFAR
-    training_cells_per_side: int = Field(
-        default=50, ge=1
-    )  # thesis table 4.2: 100 training in total
+    # "azimuth": reference cells in the neighbouring beams at the same range (wraps around);
+    # "range": along the beam, one-sided near the row ends.
+    axis: CfarAxis = "azimuth"
+    # table 4.2 has 100 in total; 30 per side is what a ring of 72 beams holds (see above)
+    training_cells_per_side: int = Field(default=30, ge=1)
     guard_cells_per_side: int = Field(default=5, ge=0)  # thesis table 4.2: 10 guard in total
     false_alarm_rate: float = Field(default=0.1, gt=0.0, lt=1.0)  # thesis table 4.2
     # OS-CFAR order k among the 2 * training_cells_per_side reference cells; None picks
@@ -129,7 +139,7 @@ class ImuConfig(_Frozen):
 
 
 class FusionConfig(_Frozen):
-    """Vessel-centred obstacle grid from LIDAR boxes and radar detections (thesis fig. 21)."""
+    """Vessel-centred obstacle grid from LIDAR boxes and radar targets (thesis figure 3.21)."""
 
     frame_id: str = "base_link"
     size_m: float = Field(default=200.0, gt=0.0)  # square side; covers the 100 m sensor ranges
@@ -137,8 +147,9 @@ class FusionConfig(_Frozen):
     publish_rate_hz: float = 2.0  # the LIDAR rate, thesis 4.1
     lidar_offset_xy_m: tuple[float, float] = (0.0, 0.0)  # sensor origins in the vessel frame
     radar_offset_xy_m: tuple[float, float] = (0.0, 0.0)
-    lidar_range_m: float = 100.0  # coverage: cells beyond every sensor's range are unknown
-    radar_range_m: float = 200.0
+    # coverage: cells beyond every sensor's range are unknown
+    lidar_range_m: float = 100.0  # thesis 3.3.1: the Velodyne Puck's 100 m
+    radar_range_m: float = 100.0  # thesis 4.1: the virtual radar's ~100 m
     # Boxes wholly above this height (bridges, overhead lines) are no obstacle to the hull.
     max_obstacle_z_m: float = 20.0
 

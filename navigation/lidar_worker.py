@@ -36,7 +36,7 @@ log = logging.getLogger(__name__)
 
 # Sub-step name -> (start_ns, end_ns) wall clock, for stage tracing (docs/tracing.md)
 StepTimes = dict[str, tuple[int, int]]
-POINT_BYTES = 16  # (x, y, z, intensity) float32
+POINT_BYTES = 12  # (x, y, z) float32: the LIDAR step uses no intensity
 PARENT_POLL_S = 1.0  # where pidfd is missing: how soon an orphaned worker notices
 START_TIMEOUT_S = 120.0  # importing numpy + scikit-learn on a loaded 2-core machine
 
@@ -137,13 +137,13 @@ class ProcessLidarWorker:
             self._ensure_started()
 
     def __call__(self, points: np.ndarray) -> ScanBoxes:
-        """points : (n, 4) float32, any strides (a view of the message's bytes)."""
+        """points : (n, >=3) float32, any strides (a view of the message's bytes)."""
         with self._lock:
             pool = self._ensure_started()
             buffer = self._buffer_for(points.shape[0] * POINT_BYTES)
             count = points.shape[0]
-            staged = np.ndarray((count, 4), np.float32, buffer=buffer.buf)
-            np.copyto(staged, points[:, :4], casting="same_kind")  # releases the GIL
+            staged = np.ndarray((count, 3), np.float32, buffer=buffer.buf)
+            np.copyto(staged, points[:, :3], casting="same_kind")  # releases the GIL
             del staged  # no view may outlive the buffer (SharedMemory.close refuses)
             future = pool.submit(_run_shared, self._step, buffer.name, count, self._config)
             try:
@@ -260,7 +260,7 @@ def _run_shared(step: ScanStep, name: str, count: int, config: LidarConfig) -> S
     """
     buffer = SharedMemory(name)
     try:
-        points = np.array(np.ndarray((count, 4), np.float32, buffer=buffer.buf))
+        points = np.array(np.ndarray((count, 3), np.float32, buffer=buffer.buf))
     finally:
         buffer.close()
     return step(points, config)

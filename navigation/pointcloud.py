@@ -13,7 +13,7 @@ XYZI_FIELDS = ("x", "y", "z", "intensity")
 
 
 class PointCloudLayoutError(ValueError):
-    """The cloud does not carry x, y, z, intensity as consecutive little-endian float32."""
+    """The cloud does not carry x, y, z (, intensity) as consecutive little-endian float32."""
 
 
 def xyzi_view(msg: dict[str, Any]) -> np.ndarray:
@@ -22,15 +22,26 @@ def xyzi_view(msg: dict[str, Any]) -> np.ndarray:
     The view shares memory with ``msg["data"]`` (read-only for ``bytes``); a wider
     ``point_step`` (padding, extra fields after intensity) becomes a strided view.
     """
+    return _float_view(msg, XYZI_FIELDS)
+
+
+def xyz_view(msg: dict[str, Any]) -> np.ndarray:
+    """View a canonical PointCloud2 as points : (n, 3) float32 [x, y, z], with or without
+    an intensity field (the thesis's clouds carried x, y, z alone, 3.5.2)."""
+    return _float_view(msg, XYZI_FIELDS[:3])
+
+
+def _float_view(msg: dict[str, Any], names: tuple[str, ...]) -> np.ndarray:
+    """(n, len(names)) float32 view of consecutive float32 fields ``names``."""
     fields = {f["name"]: f for f in msg["fields"]}
-    missing = [name for name in XYZI_FIELDS if name not in fields]
+    missing = [name for name in names if name not in fields]
     if missing:
         raise PointCloudLayoutError(f"PointCloud2 lacks fields {missing}")
     offset = int(fields["x"]["offset"])
-    for i, name in enumerate(XYZI_FIELDS):
+    for i, name in enumerate(names):
         field = fields[name]
         if field["datatype"] != FLOAT32 or int(field["offset"]) != offset + 4 * i:
-            raise PointCloudLayoutError("x, y, z, intensity must be consecutive float32 fields")
+            raise PointCloudLayoutError(f"{', '.join(names)} must be consecutive float32 fields")
     if msg["is_bigendian"]:
         raise PointCloudLayoutError("big-endian PointCloud2 is not supported")
     step = int(msg["point_step"])
@@ -40,7 +51,7 @@ def xyzi_view(msg: dict[str, Any]) -> np.ndarray:
         raise PointCloudLayoutError(f"data holds {len(data)} B, need {count * step} B")
     buffer = np.frombuffer(data, dtype=np.uint8)
     return np.ndarray(
-        shape=(count, 4), dtype="<f4", buffer=buffer, offset=offset, strides=(step, 4)
+        shape=(count, len(names)), dtype="<f4", buffer=buffer, offset=offset, strides=(step, 4)
     )
 
 

@@ -22,7 +22,7 @@ from navigation.fusion import obstacle_grid, occupancy_grid_msg
 from navigation.lidar_messages import box_array_msg, marker_array_msg
 from navigation.lidar_worker import LidarWorker, StepTimes, lidar_worker_for
 from navigation.messages import stamp_ns_of
-from navigation.pointcloud import xyzi_view
+from navigation.pointcloud import xyz_view
 from navigation.radar import PolarGeometry, detect, detection_array_msg, radar_power
 
 TOPIC_BOXES = "/nav/boxes"
@@ -78,7 +78,8 @@ class Processors:
         """``lidar_worker`` defaults to the one ``config.lidar.worker`` names."""
         self.config = config
         self.latest = LatestObstacles()
-        self._detectors: dict[int, CfarDetector] = {}  # by row length; rows rarely change
+        self._detector = CfarDetector.from_config(config.cfar)
+        self._fitting_shapes: set[tuple[int, int]] = set()  # image shapes the window fits
         self.lidar_steps: StepTimes = {}  # sub-step spans of the last scan (see `lidar`)
         self.lidar_worker = lidar_worker or lidar_worker_for(config.lidar)
 
@@ -95,7 +96,7 @@ class Processors:
         spans of ``filter``, ``dbscan`` and ``boxes`` (the thesis's 29 ms and 186 ms) in
         ``lidar_steps`` for stage tracing (one LIDAR thread, so read it after the call)."""
         stamp_ns, frame_id = stamp_ns_of(msg["header"]), msg["header"]["frame_id"]
-        result = self.lidar_worker(xyzi_view(msg))
+        result = self.lidar_worker(xyz_view(msg))
         self.lidar_steps = result.steps
         self.latest.set_boxes(result.boxes, stamp_ns)
         method = self.config.lidar.method
@@ -106,17 +107,22 @@ class Processors:
         ]
 
     def radar(self, msg: dict[str, Any]) -> Outputs:
-        """RadarImage -> RadarDetectionArray (thesis 3.5.3, SOCA-CFAR by default)."""
+        """RadarImage -> RadarDetectionArray (thesis 3.5.3, SOCA-CFAR by default): detected
+        cells grouped into targets. The obstacle map takes the targets' cells (so a long
+        target such as a bank keeps its extent). Raises ``CfarWindowError`` (naming the
+        fields) when the configured window does not fit the image."""
         power = radar_power(msg)
-        cells = power.shape[1]
-        if cells not in self._detectors:
-            self._detectors[cells] = CfarDetector.from_config(self.config.cfar, num_cells=cells)
-        detector = self._detectors[cells]
-        found = detect(power, PolarGeometry.of(msg), detector)
+        detector = self._detector
+        if power.shape not in self._fitting_shapes:
+            detector.check_fits(*power.shape)
+            self._fitting_shapes.add(power.shape)
+        found, targets = detect(power, PolarGeometry.of(msg), detector)
         stamp_ns = stamp_ns_of(msg["header"])
-        self.latest.set_radar(np.column_stack([found.x_m, found.y_m]), stamp_ns)
+        in_target = found.target >= 0
+        self.latest.set_radar(np.column_stack([found.x_m[in_target], found.y_m[in_target]]),
+                              stamp_ns)
         frame_id = msg["header"]["frame_id"]
-        return [(TOPIC_RADAR, detection_array_msg(found, stamp_ns, frame_id, detector))]
+        return [(TOPIC_RADAR, detection_array_msg(found, targets, stamp_ns, frame_id, detector))]
 
     def camera(self, msg: dict[str, Any]) -> Outputs:
         """CompressedImage -> ImageLineArray (thesis table 4.6)."""

@@ -111,12 +111,22 @@ def loads(data: bytes | bytearray | memoryview | str) -> Any:
 
     Raises :class:`DecodeError` for anything that is not JSON.
     """
+    return loads_strictness(data)[0]
+
+
+def loads_strictness(data: bytes | bytearray | memoryview | str) -> tuple[Any, bool]:
+    """``loads``, and whether orjson's strict parser read the text.
+
+    If it did, every string has a UTF-8 form (no lone surrogates), every key is a string,
+    every integer fits in 64 bits and every float is finite: only the nesting depth (up to
+    orjson's 1024) is unchecked. The lenient fallback gives none of these guarantees.
+    """
     try:
-        return orjson.loads(data)
+        return orjson.loads(data), True
     except orjson.JSONDecodeError:
         pass
     try:
         text = data if isinstance(data, str) else bytes(data).decode("utf-8")
-        return json.loads(text)
+        return json.loads(text), False
     except (UnicodeDecodeError, ValueError, RecursionError) as exc:
         raise DecodeError(f"invalid JSON: {exc}") from None

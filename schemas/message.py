@@ -21,6 +21,7 @@ import pybase64
 
 from schemas import primitives, specs
 from schemas.errors import MessageValidationError
+from schemas.safety import echo
 from schemas.specs import FieldSpec, MessageSpec
 
 _NS_PER_S = 1_000_000_000
@@ -49,10 +50,7 @@ class _FieldError(Exception):
 
 def _describe(value: Any) -> str:
     """``float 42.0``, ``str 'fast'``: what a rejected value was, kept to one short line."""
-    text = repr(value)
-    if len(text) > 40:
-        text = text[:37] + "..."
-    return f"{type(value).__name__} {text}"
+    return f"{type(value).__name__} {echo(value, 40)}"
 
 
 # -- time -------------------------------------------------------------------------------------

@@ -15,17 +15,50 @@ from types import MappingProxyType
 from typing import Annotated, Any, Literal, NamedTuple
 
 from pydantic import (
+    AfterValidator,
     BaseModel,
     ConfigDict,
     Field,
     StrictBool,
     StrictInt,
     StrictStr,
+    StringConstraints,
     ValidationError,
     field_validator,
 )
 
 from schemas.errors import SchemaError
+from schemas.safety import echo
+
+#: Longest `id` string accepted: ids are echoed in answers (the bridge's own request ids,
+#: `service_request:<247-character name>:<n>`, fit).
+MAX_ID_CHARS = 300
+#: Longest topic, service, action or type string read (valid ROS names have at most 247).
+MAX_NAME_CHARS = 512
+#: A call_service timeout beyond a day is taken as a day (the deadline must stay a number).
+MAX_TIMEOUT_S = 86_400.0
+
+
+def _check_id(value: Any) -> Any:
+    if value is None or isinstance(value, bool | int | float):
+        return value
+    if isinstance(value, str) and len(value) <= MAX_ID_CHARS:
+        return value
+    raise ValueError(f"must be a string of at most {MAX_ID_CHARS} characters, a number or null")
+
+
+def reply_id(value: Any) -> Any:
+    """The id to echo in an answer to a message: its own if acceptable, else None."""
+    try:
+        return _check_id(value)
+    except ValueError:
+        return None
+
+
+#: An op's `id`: echoed back, so it must be short (rosbridge clients send strings or numbers).
+Id = Annotated[Any, AfterValidator(_check_id)]
+#: A topic, service, action or type string; names are validated by the bridge after this.
+Name = Annotated[StrictStr, StringConstraints(max_length=MAX_NAME_CHARS)]
 
 
 class OpError(SchemaError):
@@ -61,9 +94,9 @@ def _object_required(value: Any) -> Any:
 
 class Advertise(OpBase):
     op: Literal["advertise"] = "advertise"
-    id: Any = None
-    topic: StrictStr
-    type: StrictStr
+    id: Id = None
+    topic: Name
+    type: Name
     latch: StrictBool = False
     queue_size: StrictInt = 100
     qos: dict | None = None
@@ -71,27 +104,27 @@ class Advertise(OpBase):
 
 class Unadvertise(OpBase):
     op: Literal["unadvertise"] = "unadvertise"
-    id: Any = None
-    topic: StrictStr
+    id: Id = None
+    topic: Name
 
 
 class Publish(OpBase):
     op: Literal["publish"] = "publish"
-    topic: StrictStr
+    topic: Name
     msg: Any = Field(default_factory=dict)
-    id: Any = None
+    id: Id = None
     latch: StrictBool = False
     queue_size: StrictInt = 100
-    type: StrictStr | None = None
+    type: Name | None = None
 
     _check_msg = field_validator("msg")(_object_required)
 
 
 class Subscribe(OpBase):
     op: Literal["subscribe"] = "subscribe"
-    id: Any = None
-    topic: StrictStr
-    type: StrictStr | None = None  # roslibpy sends null when the user gave none
+    id: Id = None
+    topic: Name
+    type: Name | None = None  # roslibpy sends null when the user gave none
     throttle_rate: StrictInt = 0  # ms between messages; a float is rejected like rosbridge
     queue_length: StrictInt = 0
     fragment_size: StrictInt | None = None
@@ -101,8 +134,8 @@ class Subscribe(OpBase):
 
 class Unsubscribe(OpBase):
     op: Literal["unsubscribe"] = "unsubscribe"
-    id: Any = None
-    topic: StrictStr
+    id: Id = None
+    topic: Name
 
 
 # -- services ---------------------------------------------------------------------------------
@@ -110,36 +143,36 @@ class Unsubscribe(OpBase):
 
 class CallService(OpBase):
     op: Literal["call_service"] = "call_service"
-    id: Any = None
-    service: StrictStr
+    id: Id = None
+    service: Name
     args: Any = Field(default_factory=dict)
     type: Any = None  # accepted and ignored: the graph decides (Lichtblick sends ROS 1 names)
     fragment_size: StrictInt | None = None
     compression: StrictStr = "none"
-    timeout: float | None = None  # seconds
+    timeout: Annotated[float, Field(allow_inf_nan=False)] | None = None  # seconds
 
     _check_args = field_validator("args")(_object_or_empty)
 
 
 class AdvertiseService(OpBase):
     op: Literal["advertise_service"] = "advertise_service"
-    id: Any = None
-    type: StrictStr
-    service: StrictStr
+    id: Id = None
+    type: Name
+    service: Name
 
 
 class UnadvertiseService(OpBase):
     op: Literal["unadvertise_service"] = "unadvertise_service"
-    id: Any = None
-    service: StrictStr
+    id: Id = None
+    service: Name
 
 
 class ServiceResponse(OpBase):
     op: Literal["service_response"] = "service_response"
-    service: StrictStr
+    service: Name
     values: Any = None  # an object on success, the error text on failure
     result: StrictBool
-    id: Any = None
+    id: Id = None
 
 
 # -- actions ----------------------------------------------------------------------------------
@@ -147,9 +180,9 @@ class ServiceResponse(OpBase):
 
 class SendActionGoal(OpBase):
     op: Literal["send_action_goal"] = "send_action_goal"
-    id: Any = None
-    action: StrictStr
-    action_type: StrictStr
+    id: Id = None
+    action: Name
+    action_type: Name
     args: Any = Field(default_factory=dict)
     feedback: bool = False
     fragment_size: StrictInt | None = None
@@ -160,39 +193,39 @@ class SendActionGoal(OpBase):
 
 class CancelActionGoal(OpBase):
     op: Literal["cancel_action_goal"] = "cancel_action_goal"
-    id: Any = None
-    action: StrictStr
+    id: Id = None
+    action: Name
 
 
 class ActionFeedback(OpBase):
     op: Literal["action_feedback"] = "action_feedback"
-    action: StrictStr
+    action: Name
     values: Any = Field(default_factory=dict)
-    id: Any = None
+    id: Id = None
 
     _check_values = field_validator("values")(_object_required)
 
 
 class ActionResult(OpBase):
     op: Literal["action_result"] = "action_result"
-    action: StrictStr
+    action: Name
     values: Any = None  # an object, or the error text when result is false
     status: StrictInt
     result: StrictBool
-    id: Any = None
+    id: Id = None
 
 
 class AdvertiseAction(OpBase):
     op: Literal["advertise_action"] = "advertise_action"
-    id: Any = None
-    type: StrictStr
-    action: StrictStr
+    id: Id = None
+    type: Name
+    action: Name
 
 
 class UnadvertiseAction(OpBase):
     op: Literal["unadvertise_action"] = "unadvertise_action"
-    id: Any = None
-    action: StrictStr
+    id: Id = None
+    action: Name
 
 
 # -- framing and status -----------------------------------------------------------------------
@@ -200,7 +233,7 @@ class UnadvertiseAction(OpBase):
 
 class Fragment(OpBase):
     op: Literal["fragment"] = "fragment"
-    id: Any
+    id: Id
     data: StrictStr
     num: StrictInt
     total: StrictInt  # rosbridge sends a float ((len-1)/size + 1); clients floor it
@@ -216,20 +249,34 @@ class Fragment(OpBase):
 class Png(OpBase):
     op: Literal["png"] = "png"
     data: StrictStr
-    id: Any = None
+    id: Id = None
 
 
 class SetLevel(OpBase):
     op: Literal["set_level"] = "set_level"
-    id: Any = None
+    id: Id = None
     level: Literal["info", "warning", "error", "none"]
+
+
+class Auth(OpBase):
+    """rosauth's `auth` op (schemas.rosauth); `t` and `end` are seconds or ROS times."""
+
+    op: Literal["auth"] = "auth"
+    id: Id = None
+    mac: StrictStr
+    client: StrictStr
+    dest: StrictStr
+    rand: StrictStr
+    t: Any
+    level: StrictStr
+    end: Any
 
 
 class Status(OpBase):
     op: Literal["status"] = "status"
     level: StrictStr
     msg: StrictStr
-    id: Any = None
+    id: Id = None
 
 
 OpModel = (
@@ -252,6 +299,7 @@ OpModel = (
     | ActionResult
     | AdvertiseAction
     | UnadvertiseAction
+    | Auth
 )
 Op = Annotated[OpModel, Field(discriminator="op")]
 
@@ -272,8 +320,7 @@ _PHRASES = {
 
 
 def _short_repr(value: Any) -> str:
-    text = repr(value)
-    return text if len(text) <= 60 else text[:57] + "..."
+    return echo(value, 60)
 
 
 def _describe_error(op: str, error: Mapping[str, Any], more: int) -> str:
@@ -332,20 +379,24 @@ class PublishFields(NamedTuple):
 def parse_publish(obj: Mapping[str, Any]) -> Publish | PublishFields:
     """`parse_op` for the most frequent op, without pydantic when nothing needs it.
 
-    A ``publish`` whose fields already have the types :class:`Publish` asks for (the normal
-    case, ~0.4 µs instead of ~2 µs) becomes a `PublishFields`; anything else goes through
-    `parse_op`, which refuses it with the same message as always. The message itself is not
-    looked at here: it is validated against its topic's type afterwards, either way.
+    A ``publish`` whose fields already have the types and sizes :class:`Publish` asks for (the
+    normal case, ~0.4 µs instead of ~2 µs) becomes a `PublishFields`; anything else goes
+    through `parse_op`, which refuses it with the same message as always. The message itself
+    is not looked at here: it is validated against its topic's type afterwards, either way.
     """
-    topic, msg = obj.get("topic"), obj.get("msg", _ABSENT)
+    topic, msg, op_id = obj.get("topic"), obj.get("msg", _ABSENT), obj.get("id")
     latch, queue_size = obj.get("latch", False), obj.get("queue_size", 100)
     type_name = obj.get("type")
-    if (type(topic) is str and (latch is False or latch is True) and type(queue_size) is int
-            and (type_name is None or type(type_name) is str)):
+    if (type(topic) is str and len(topic) <= MAX_NAME_CHARS
+            and (latch is False or latch is True) and type(queue_size) is int
+            and (type_name is None or (type(type_name) is str
+                                       and len(type_name) <= MAX_NAME_CHARS))
+            and (op_id is None or isinstance(op_id, bool | int | float)
+                 or (type(op_id) is str and len(op_id) <= MAX_ID_CHARS))):
         if type(msg) is dict:
-            return PublishFields(topic, msg, obj.get("id"), latch, queue_size, type_name)
+            return PublishFields(topic, msg, op_id, latch, queue_size, type_name)
         if msg is None or msg is _ABSENT:
-            return PublishFields(topic, {}, obj.get("id"), latch, queue_size, type_name)
+            return PublishFields(topic, {}, op_id, latch, queue_size, type_name)
     return parse_op(obj)  # type: ignore[return-value]
 
 

@@ -55,6 +55,7 @@ class TypeRegistry:
         self._services: dict[str, tuple[str, str]] = {}
         self._actions: dict[str, tuple[str, str, str]] = {}
         self._specs: dict[str, MessageSpec] = {}
+        self._full_texts: dict[str, str] = {}  # rosapi asks for the same texts every few s
         self._short_names: dict[str, str] = {}
         self._index_short_names(self.typestore.fielddefs)
 
@@ -168,7 +169,10 @@ class TypeRegistry:
         and its definition; ROS 2 spelling (``builtin_interfaces/Time stamp``).
         """
         full = self._resolve_message_name(name)
-        text, _md5 = self.typestore.generate_msgdef(full, ros_version=2)
+        text = self._full_texts.get(full)
+        if text is None:
+            text, _md5 = self.typestore.generate_msgdef(full, ros_version=2)
+            self._full_texts[full] = text
         return text
 
     def typedefs(self, name: str) -> list[dict]:

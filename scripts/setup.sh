@@ -7,14 +7,20 @@ cd "$(dirname "$0")/.."
 python3 -m pip install --quiet --disable-pip-version-check -e '.[test]'
 
 # Debian packages: Node.js for the roslibjs tests and the dashboard build, Chromium for the
-# dashboard's browser tests, docker-compose to validate docker-compose.yml
-# (no Docker engine runs here; `docker-compose config` checks the file against the spec).
+# dashboard's browser tests, docker-compose to validate and run docker-compose.yml, and the
+# Docker engine (docker.io: dockerd, which tests/launcher/test_compose_engine.py starts when
+# none runs) with debootstrap to build the image's base from Debian's packages.
 missing=()
 command -v node >/dev/null 2>&1 || missing+=(nodejs)
 command -v npm >/dev/null 2>&1 || missing+=(npm)
 command -v docker-compose >/dev/null 2>&1 || missing+=(docker-compose)
+command -v dockerd >/dev/null 2>&1 || missing+=(docker.io)
+command -v debootstrap >/dev/null 2>&1 || missing+=(debootstrap)
 # Debian's Chromium for the dashboard's browser tests (playwright-core drives it; no downloads)
 [ -x /usr/bin/chromium ] || missing+=(chromium)
+# iproute2: `ip` makes the two network namespaces of the DDS two-host test (tests/dds), `ss`
+# reads the kernel's byte counters of the stack's sockets for the report
+{ command -v ip && command -v ss; } >/dev/null 2>&1 || missing+=(iproute2)
 if [ ${#missing[@]} -gt 0 ]; then
     echo "setup: installing ${missing[*]} from Debian's packages" >&2
     apt-get update -qq

@@ -2,16 +2,17 @@
 
 Every model forbids unknown fields, so a typo in a TOML file names the offending field instead
 of being silently ignored. Angles in configuration are degrees (as the thesis tables give them);
-the numeric core converts once when it builds its ray tables.
+the numeric core converts once when it builds its ray tables. config/sim.toml lists every
+field with its default and source.
 """
 
 from __future__ import annotations
 
 import tomllib
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 
 class _Frozen(BaseModel):
@@ -55,7 +56,15 @@ class SceneConfig(_Frozen):
 
 
 class LidarConfig(_Frozen):
-    """Thesis table 4.3: 0.25 deg x 0.25 deg, 360 deg x 60 deg field of view, 2 Hz."""
+    """Thesis table 4.3: 0.25 deg x 0.25 deg, 360 deg x 60 deg field of view, 2 Hz.
+
+    water_model (docs/quality.md): "mesh" returns every ray that meets the water surface, weakly
+    (reflectivity 0.05), as a Unity raycast against the thesis's flat water collision mesh
+    (3.5.3) does: the heaviest scan (~180k points, 88 % of them water) and the default, because
+    it is the thesis scene and the worst case for transport and filtering. "specular" is a 905 nm
+    LIDAR on calm water: the surface mirrors the beam away and returns only within
+    `water_max_incidence_deg` of the normal (nadir), so a level sensor sees no water at all.
+    """
 
     horizontal_resolution_deg: Annotated[float, Field(gt=0)] = 0.25  # table 4.3
     vertical_resolution_deg: Annotated[float, Field(gt=0)] = 0.25  # table 4.3
@@ -65,6 +74,13 @@ class LidarConfig(_Frozen):
     range_min_m: Annotated[float, Field(ge=0)] = 0.5
     range_max_m: Annotated[float, Field(gt=0)] = 200.0
     range_noise_std_m: Annotated[float, Field(ge=0)] = 0.0
+    water_model: Literal["mesh", "specular"] = "mesh"
+    # specular only: calm water returns near nadir; a level sensor's steepest ray (30 deg down,
+    # table 4.3) meets it at 60 deg
+    water_max_incidence_deg: Annotated[float, Field(ge=0, le=90)] = 15.0
+    # "xyzi": x, y, z, intensity float32 (16 B per point); "xyz": x, y, z float32 (12 B), the
+    # thesis's "one list for each dimension" (3.5.2)
+    point_fields: Literal["xyzi", "xyz"] = "xyzi"
     frame_id: str = "lidar"
     mount: MountConfig = MountConfig(z_m=3.0)
 
@@ -82,8 +98,8 @@ class RadarConfig(_Frozen):
     range_min_m: Annotated[float, Field(ge=0)] = 0.0
     # thesis 4.1: detection limited to about 100 m
     range_max_m: Annotated[float, Field(gt=0)] = 100.0
-    rate_hz: Annotated[float, Field(gt=0)] = 2.0
-    # Rayleigh sigma added per cell; 0 = no clutter
+    rate_hz: Annotated[float, Field(gt=0)] = 2.0  # thesis 4.2: every sensor at 2 Hz but the IMU
+    # Rayleigh sigma added per cell; 0 = no clutter (thesis 3.5.3: no wakes, no clutter)
     clutter_scale: Annotated[float, Field(ge=0)] = 0.0
     frame_id: str = "radar"
     mount: MountConfig = MountConfig(z_m=3.5)
@@ -97,7 +113,7 @@ class CameraConfig(_Frozen):
     # Unity's default camera field of view
     vertical_fov_deg: Annotated[float, Field(gt=0, lt=180)] = 60.0
     jpeg_quality: Annotated[int, Field(ge=1, le=100)] = 85
-    rate_hz: Annotated[float, Field(gt=0)] = 2.0
+    rate_hz: Annotated[float, Field(gt=0)] = 2.0  # thesis 4.2: every sensor at 2 Hz but the IMU
     max_range_m: Annotated[float, Field(gt=0)] = 3000.0
     sun_direction_xyz: tuple[float, float, float] = (0.4, 0.3, 0.85)  # map frame, normalised later
     ambient: Annotated[float, Field(ge=0, le=1)] = 0.35
@@ -153,7 +169,7 @@ class VesselConfig(_Frozen):
     d_r: Annotated[float, Field(ge=0)] = 3000.0  # N m s/rad
     d_r2: Annotated[float, Field(ge=0)] = 2000.0
     d_r3: Annotated[float, Field(ge=0)] = 0.0
-    # fixed physics step (Unity FixedUpdate is 50 Hz)
+    # fixed physics step (thesis 4.2: Unity's default physics update of 20 ms)
     physics_rate_hz: Annotated[float, Field(gt=0)] = 50.0
     # commands are clipped to the actuators
     max_surge_force_n: Annotated[float, Field(gt=0)] = 4000.0
@@ -170,9 +186,43 @@ class VesselConfig(_Frozen):
     collision_clearance_m: Annotated[float, Field(ge=0)] = 0.3
 
 
-class SimConfig(_Frozen):
-    """Everything the simulator needs; `seed` makes scene, noise and clutter reproducible."""
+class GroundTruthConfig(_Frozen):
+    """What the simulator publishes about its scene for judging navigation (docs/quality.md)."""
 
+    # /sim/ground_truth (MarkerArray, latched) and per scan /sim/ground_truth/lidar and
+    # /sim/ground_truth/radar; costs ~1 ms per scan (a gather and two bincounts)
+    enabled: bool = True
+
+
+# Payload profiles: settings a profile changes unless the file sets them itself.
+# "thesis" sends the thesis's LIDAR payload (docs/quality.md): table 4.9 gives 285.37 KB per
+# LIDAR message (the caption's "average size of 100 message"), i.e. ~23,800 points of x, y, z
+# float32 (the thesis's "one list for each dimension", 3.5.2; 12 B per point). x, y, z points
+# and specular water give ~21,000 points (~255 kB) here at the start pose. Radar, camera and
+# IMU keep their messages (see docs/quality.md for why).
+PROFILES: dict[str, dict[str, Any]] = {
+    "default": {},
+    "thesis": {"lidar": {"point_fields": "xyz", "water_model": "specular"}},
+}
+Profile = Literal["default", "thesis"]
+
+
+def _merged(base: dict[str, Any], override: dict[str, Any]) -> dict[str, Any]:
+    """`base` with `override` laid over it, tables merged key by key."""
+    out = dict(base)
+    for key, value in override.items():
+        if isinstance(value, dict) and isinstance(out.get(key), dict):
+            out[key] = _merged(out[key], value)
+        else:
+            out[key] = value
+    return out
+
+
+class SimConfig(_Frozen):
+    """Everything the simulator needs; `seed` makes scene, noise and clutter reproducible;
+    `profile` picks a payload profile (PROFILES), whose settings a file's own ones override."""
+
+    profile: Profile = "default"
     seed: int = 7
     scene: SceneConfig = SceneConfig()
     vessel: VesselConfig = VesselConfig()
@@ -181,6 +231,14 @@ class SimConfig(_Frozen):
     camera: CameraConfig = CameraConfig()
     imu: ImuConfig = ImuConfig()
     gnss: GnssConfig = GnssConfig()
+    ground_truth: GroundTruthConfig = GroundTruthConfig()
+
+    @model_validator(mode="before")
+    @classmethod
+    def _apply_profile(cls, data: Any) -> Any:
+        if isinstance(data, dict) and isinstance(data.get("profile"), str):
+            return _merged(PROFILES.get(data["profile"], {}), data)
+        return data
 
 
 def load_config(path: str | Path) -> SimConfig:

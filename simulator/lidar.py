@@ -2,20 +2,32 @@
 
 The ray directions are built once in the sensor frame; a scan rotates them by the pose with
 one matmul into a reused buffer, casts them on the ray-casting threads, and keeps the hits as
-(range * direction) in the sensor frame, so no point is ever touched by Python code.
+(range * direction) in the sensor frame, so no point is ever touched by Python code. Which
+water hits return follows `LidarConfig.water_model`; each point remembers what it hit (an
+object id, LAND or WATER) for the ground truth.
 """
 
 from __future__ import annotations
 
 from functools import partial
+from typing import NamedTuple
 
 import numpy as np
 
 from simulator.config import LidarConfig
 from simulator.frames import Pose2D, rotate_rows, sensor_pose_in_map
 from simulator.messages import point_cloud2
+from simulator.objects import WATER
 from simulator.raycast import RayCaster, fill_origins
 from simulator.scene import Scene
+
+
+class LidarScan(NamedTuple):
+    """points : (n, 4) float32 (x, y, z sensor frame, intensity); source : (n,) int32, what
+    each point hit (object id, or LAND / WATER; `simulator.objects`), empty unless asked."""
+
+    points: np.ndarray
+    source: np.ndarray
 
 
 def lidar_directions(cfg: LidarConfig) -> np.ndarray:
@@ -51,6 +63,8 @@ class Lidar:
         self._origins = np.empty((n, 3), np.float32)
         self._caster = RayCaster(threads)
         self._rng = np.random.default_rng(seed)
+        self._specular = self.cfg.water_model == "specular"
+        self._cos_max_incidence = float(np.cos(np.radians(self.cfg.water_max_incidence_deg)))
 
     @property
     def ray_count(self) -> int:
@@ -63,33 +77,65 @@ class Lidar:
         """One revolution from the vessel at `pose`.
 
         returns points : (n, 4) float32 (x, y, z in the sensor frame, metres; intensity 0..1),
-        hits only, ordered by ray; rays ending on no-return surfaces (water) are dropped.
+        hits only, ordered by ray; rays ending on no-return surfaces are dropped.
         """
+        return self._scan(scene, pose, with_sources=False).points
+
+    def scan_with_sources(self, scene: Scene, pose: Pose2D) -> LidarScan:
+        """`scan`, plus what every point hit (for the ground truth; one more gather)."""
+        return self._scan(scene, pose, with_sources=True)
+
+    def _scan(self, scene: Scene, pose: Pose2D, with_sources: bool) -> LidarScan:
         origin, rotation = sensor_pose_in_map(pose, self.cfg.mount, scene.water_level_m)
         rotate_rows(self.directions_sensor, rotation, self._directions_map)
         fill_origins(self._origins, origin)
         chunks = self._caster.map_chunks(scene, self._origins, self._directions_map,
-                                         self.cfg.range_max_m, partial(self._points, scene))
-        points = np.concatenate(chunks) if len(chunks) > 1 else chunks[0]
+                                         self.cfg.range_max_m,
+                                         partial(self._points, scene, with_sources))
+        if len(chunks) > 1:
+            points = np.concatenate([c.points for c in chunks])
+            source = np.concatenate([c.source for c in chunks])
+        else:
+            points, source = chunks[0]
         if self.cfg.range_noise_std_m > 0:  # drawn here, in ray order, so threads don't matter
             range_m = np.linalg.norm(points[:, :3], axis=1)
             noise_m = self._rng.normal(0.0, self.cfg.range_noise_std_m, len(points))
             points[:, :3] *= ((range_m + noise_m) / range_m)[:, None]
-        return points
+        return LidarScan(points, source)
 
-    def _points(self, scene: Scene, chunk: slice, range_m: np.ndarray, prim: np.ndarray):
-        """(k, 4) float32 points of the returning rays in one chunk (runs on a worker thread)."""
+    def _points(self, scene: Scene, with_sources: bool, chunk: slice, range_m: np.ndarray,
+                prim: np.ndarray) -> LidarScan:
+        """The returning rays of one chunk (runs on a worker thread); sources only if asked."""
         hit = np.flatnonzero(prim >= 0)
-        intensity = np.take(scene.lidar_reflectivity, np.take(prim, hit))
+        faces = np.take(prim, hit)
+        intensity = np.take(scene.lidar_reflectivity, faces)
         ranges = np.take(range_m, hit)
         keep = (intensity > 0) & (ranges >= self.cfg.range_min_m)
+        if self._specular:
+            keep &= self._water_returns(scene, chunk, hit, faces)
         hit, intensity, ranges = hit[keep], intensity[keep], ranges[keep]
         points = np.empty((len(hit), 4), np.float32)
         directions = np.take(self.directions_sensor[chunk], hit, axis=0)
         np.multiply(directions, ranges[:, None], out=points[:, :3])
         points[:, 3] = intensity
-        return points
+        source = (np.take(scene.face_source, faces[keep]) if with_sources
+                  else np.empty(0, np.int32))
+        return LidarScan(points, source)
+
+    def _water_returns(self, scene: Scene, chunk: slice, hit: np.ndarray,
+                       faces: np.ndarray) -> np.ndarray:
+        """Specular water: (k,) bool, False for water hits further than the maximum incidence
+        from the surface normal (the beam is mirrored away), True for everything else."""
+        water = np.flatnonzero(np.take(scene.face_source, faces) == WATER)
+        keep = np.ones(len(hit), bool)
+        if water.size:
+            directions = np.take(self._directions_map[chunk], hit[water], axis=0)
+            normals = np.take(scene.face_normals, faces[water], axis=0)
+            cos_incidence = np.abs(np.einsum("ij,ij->i", directions, normals))
+            keep[water] = cos_incidence >= self._cos_max_incidence
+        return keep
 
     def message(self, points: np.ndarray, stamp_ns: int) -> dict:
-        """sensor_msgs/msg/PointCloud2 of a scan, stamped with its capture time."""
-        return point_cloud2(points, stamp_ns, self.cfg.frame_id)
+        """sensor_msgs/msg/PointCloud2 of a scan (`point_fields`), stamped with its capture
+        time."""
+        return point_cloud2(points, stamp_ns, self.cfg.frame_id, self.cfg.point_fields)

@@ -40,14 +40,19 @@ def diagonal_covariance(variances) -> list[float]:
     return [float(v) for v in np.diag(np.asarray(variances, dtype=np.float64)).ravel()]
 
 
-def point_cloud2(points: np.ndarray, stamp_ns: int, frame_id: str) -> dict:
-    """sensor_msgs/msg/PointCloud2 of x, y, z, intensity float32 (16-byte points, unordered).
+def point_cloud2(points: np.ndarray, stamp_ns: int, frame_id: str,
+                 fields: str = "xyzi") -> dict:
+    """sensor_msgs/msg/PointCloud2 of x, y, z, intensity float32 (16-byte points, unordered),
+    or of x, y, z alone (`fields="xyz"`, 12-byte points).
 
-    points : (n, 4) float32, C-contiguous; its buffer becomes `data` in one copy.
+    points : (n, 4) float32; its (first three) columns become `data` in one copy.
     """
-    points = np.ascontiguousarray(points, dtype="<f4")
+    points = np.asarray(points)
     if points.ndim != 2 or points.shape[1] != 4:
         raise ValueError(f"points must be (n, 4), got {points.shape}")
+    names = POINT_FIELDS if fields == "xyzi" else POINT_FIELDS[:3]
+    step = 4 * len(names)
+    data = np.ascontiguousarray(points[:, : len(names)], dtype="<f4")
     n = len(points)
     return {
         "header": header(stamp_ns, frame_id),
@@ -55,12 +60,12 @@ def point_cloud2(points: np.ndarray, stamp_ns: int, frame_id: str) -> dict:
         "width": n,
         "fields": [
             {"name": name, "offset": 4 * k, "datatype": POINTFIELD_FLOAT32, "count": 1}
-            for k, name in enumerate(POINT_FIELDS)
+            for k, name in enumerate(names)
         ],
         "is_bigendian": False,
-        "point_step": 16,
-        "row_step": 16 * n,
-        "data": points.tobytes(),
+        "point_step": step,
+        "row_step": step * n,
+        "data": data.tobytes(),
         "is_dense": True,
     }
 

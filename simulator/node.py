@@ -8,7 +8,8 @@ release the GIL), so the IMU never waits behind a scan. A sensor that overruns i
 the missed ticks instead of queueing them. All sensor topics are advertised `latest_only`, so a
 publish never blocks the schedule. The small, frequent messages travel on a connection of their
 own, so they never queue on the wire behind a scan. Per-sensor generation times are logged
-periodically.
+periodically. With `[ground_truth] enabled`, the scene's objects go out once (latched) and
+every LIDAR scan and radar sweep is followed by what it saw (simulator.truth).
 """
 
 from __future__ import annotations
@@ -38,6 +39,7 @@ from simulator.lidar import Lidar
 from simulator.messages import BASE_FRAME, odometry, tf_message, transform_stamped, vessel_tf
 from simulator.radar import Radar
 from simulator.scene import Scene, build_scene
+from simulator.truth import MARKERS_TYPE, TRUTH_TYPE, lidar_truth, markers_msg, radar_truth
 
 log = logging.getLogger(__name__)
 
@@ -52,10 +54,20 @@ TOPICS = {
     "tf": ("/tf", "tf2_msgs/msg/TFMessage"),
 }
 TF_STATIC = ("/tf_static", "tf2_msgs/msg/TFMessage")
+GROUND_TRUTH = ("/sim/ground_truth", MARKERS_TYPE)
+# The effective configuration as JSON (latched), so a recording or a report knows what ran.
+SIM_CONFIG = ("/sim/config", "std_msgs/msg/String")
+TRUTH_TOPICS = {"lidar": "/sim/ground_truth/lidar", "radar": "/sim/ground_truth/radar"}
 COMMAND = ("/cmd_wrench", "geometry_msgs/msg/Wrench")
 HEAVY_SENSORS = ("lidar", "radar", "camera")
 STATS_PERIOD_S = 10.0
 MAX_CATCH_UP_STEPS = 25  # after a long stall, jump ahead rather than spin through the backlog
+# The truth of a scan goes out this long after the scan: not while the bridge is still handing
+# the scan on (its loop would decode and fan out the truth in the scan's way); it is stamped
+# with the scan's capture time, so a judge pairs it all the same.
+TRUTH_DELAY_S = 0.1
+# A sensor tick's work: its message first, then (topic, message) pairs of ground truth.
+Outputs = list[Any]
 
 
 class GenerationTimes:
@@ -127,6 +139,7 @@ class SimulatorNode:
         self.gnss = Gnss(cfg.gnss, seed=cfg.seed + 4)
         self.timings = {name: GenerationTimes() for name in (*HEAVY_SENSORS, "physics")}
         self.physics_lateness = GenerationTimes()  # ms each physics tick started behind schedule
+        self._truth_tasks: set[asyncio.Task[None]] = set()
         self._executors = {name: ThreadPoolExecutor(1, thread_name_prefix=f"sim-{name}",
                                                     initializer=background_priority)
                            for name in HEAVY_SENSORS}
@@ -137,6 +150,10 @@ class SimulatorNode:
             await self._client_for(name).advertise(topic, type_name, latest_only=True)
         await self._client.advertise(*TF_STATIC, latch=True)
         await self._client.publish(TF_STATIC[0], static_transforms(self.cfg, self._clock_ns()))
+        await self._client.advertise(*SIM_CONFIG, latch=True)
+        await self._client.publish(SIM_CONFIG[0], {"data": self.cfg.model_dump_json()})
+        if self.cfg.ground_truth.enabled:
+            await self._advertise_truth()
         commands = await self._realtime.subscribe(*COMMAND, maxsize=1)
         generators = {"lidar": self._lidar, "radar": self._radar, "camera": self._camera}
         rates = {"lidar": self.cfg.lidar.rate_hz, "radar": self.cfg.radar.rate_hz,
@@ -151,15 +168,22 @@ class SimulatorNode:
         try:
             await stop.wait()
         finally:
-            for task in tasks:
+            for task in [*tasks, *self._truth_tasks]:
                 task.cancel()
-            for task in tasks:
+            for task in [*tasks, *self._truth_tasks]:
                 with contextlib.suppress(asyncio.CancelledError):
                     await task
             for executor in self._executors.values():
                 executor.shutdown(wait=True, cancel_futures=True)
             for sensor in (self.lidar, self.radar, self.camera):
                 sensor.close()
+
+    async def _advertise_truth(self) -> None:
+        for topic in TRUTH_TOPICS.values():
+            await self._client.advertise(topic, TRUTH_TYPE, latest_only=True)
+        await self._client.advertise(*GROUND_TRUTH, latch=True)
+        await self._client.publish(GROUND_TRUTH[0],
+                                   markers_msg(self.scene.objects, self._clock_ns()))
 
     def _client_for(self, sensor: str) -> RosbridgeClient:
         return self._client if sensor in HEAVY_SENSORS else self._realtime
@@ -213,34 +237,52 @@ class SimulatorNode:
             state.pose, water_m, (state.u_mps, state.v_mps), state.r_radps, stamp_ns))
         await self._realtime.publish(TOPICS["tf"][0], vessel_tf(state.pose, water_m, stamp_ns))
 
-    def _sensor_tick(self, name: str, work: Callable[[Any, int], dict]):
-        """A tick that captures pose and stamp now, generates on the sensor's thread, publishes."""
+    def _sensor_tick(self, name: str, work: Callable[[Any, int], Outputs]):
+        """A tick that captures pose and stamp now, generates on the sensor's thread, publishes
+        the sensor's message, and any ground truth that came with it TRUTH_DELAY_S later."""
         loop = asyncio.get_running_loop()
 
         async def tick() -> None:
             pose, stamp_ns = self.state.pose, self._clock_ns()
             started = time.perf_counter()
-            msg = await loop.run_in_executor(self._executors[name], work, pose, stamp_ns)
+            msg, *truth = await loop.run_in_executor(self._executors[name], work, pose, stamp_ns)
             self.timings[name].record((time.perf_counter() - started) * 1e3)
             self._generated(TOPICS[name][0], stamp_ns)
             await self._client.publish(TOPICS[name][0], msg)
+            if truth:
+                task = asyncio.create_task(self._publish_truth(truth))
+                self._truth_tasks.add(task)
+                task.add_done_callback(self._truth_tasks.discard)
 
         return tick
+
+    async def _publish_truth(self, truth: Outputs) -> None:
+        await asyncio.sleep(TRUTH_DELAY_S)
+        for topic, msg in truth:
+            await self._client.publish(topic, msg)
 
     def _generated(self, topic: str, stamp_ns: int) -> None:
         """Trace `generate`: capture (the stamp) → message ready (now)."""
         if self._tracer is not None:
             self._tracer.record(topic, stamp_ns, "generate", stamp_ns, self._clock_ns())
 
-    def _lidar(self, pose, stamp_ns: int) -> dict:
-        return self.lidar.message(self.lidar.scan(self.scene, pose), stamp_ns)
+    def _lidar(self, pose, stamp_ns: int) -> Outputs:
+        if not self.cfg.ground_truth.enabled:
+            return [self.lidar.message(self.lidar.scan(self.scene, pose), stamp_ns)]
+        scan = self.lidar.scan_with_sources(self.scene, pose)
+        truth = lidar_truth(self.scene, self.cfg.lidar, pose, scan.source, stamp_ns)
+        return [self.lidar.message(scan.points, stamp_ns), (TRUTH_TOPICS["lidar"], truth)]
 
-    def _radar(self, pose, stamp_ns: int) -> dict:
-        return self.radar.message(self.radar.sweep(self.scene, pose), stamp_ns)
+    def _radar(self, pose, stamp_ns: int) -> Outputs:
+        if not self.cfg.ground_truth.enabled:
+            return [self.radar.message(self.radar.sweep(self.scene, pose), stamp_ns)]
+        sweep = self.radar.sweep_with_sources(self.scene, pose)
+        truth = radar_truth(self.scene, self.cfg.radar, pose, sweep, stamp_ns)
+        return [self.radar.message(sweep.image, stamp_ns), (TRUTH_TOPICS["radar"], truth)]
 
-    def _camera(self, pose, stamp_ns: int) -> dict:
-        return self.camera.message(self.camera.encode(self.camera.render(self.scene, pose)),
-                                   stamp_ns)
+    def _camera(self, pose, stamp_ns: int) -> Outputs:
+        return [self.camera.message(self.camera.encode(self.camera.render(self.scene, pose)),
+                                    stamp_ns)]
 
     async def _publish_gnss(self) -> None:
         fix = self.gnss.fix(self.state.pose, self.scene.water_level_m)

@@ -1,7 +1,9 @@
 """Objects along the procedural river (thesis 3.5.1): landing stages, moored vessels, trees, houses.
 
 Each kind is one template mesh instanced with numpy broadcasting (positions, yaws, scales), so
-the number of objects never turns into a Python loop over vertices.
+the number of objects never turns into a Python loop over vertices. Every instance is one
+object of the ground truth (`simulator.objects`): its faces carry the object's id, and the
+parts of one object (a pontoon and its gangway, a hull and its cabin) share it.
 """
 
 from __future__ import annotations
@@ -14,17 +16,31 @@ import trimesh
 from simulator import materials
 from simulator.config import SceneConfig
 from simulator.materials import Material
+from simulator.objects import LAND, SceneObjects, object_boxes
 from simulator.terrain import HeightField
 from simulator.valley import BANK_WIDTH_M, RiverCourse
 
 
 @dataclass(frozen=True)
 class MeshPart:
-    """A triangle soup of one material: vertices (n, 3) float, faces (m, 3) int."""
+    """A triangle soup of one material: vertices (n, 3) float, faces (m, 3) int.
+
+    source : what a ray hitting a face has hit, for the ground truth: an object id >= 0 per
+    face ((m,) int), or one of `simulator.objects.LAND` / `WATER` for the whole part.
+    """
 
     vertices: np.ndarray
     faces: np.ndarray
     material: Material
+    source: np.ndarray | int = LAND
+
+
+@dataclass(frozen=True)
+class Props:
+    """Mesh parts of a group of objects and the objects themselves (ids first_id ..)."""
+
+    parts: list[MeshPart]
+    objects: SceneObjects
 
 
 def instance(
@@ -49,9 +65,27 @@ def instance(
     return moved.reshape(-1, 3), faces.reshape(-1, 3)
 
 
-def _part(template, material, positions, yaws, scales=None) -> MeshPart:
+def _part(template, material, positions, yaws, scales=None, first_id: int = 0) -> MeshPart:
+    """`template` instanced at `positions`; instance i is object first_id + i."""
     vertices, faces = instance(template, positions, yaws, scales)
-    return MeshPart(vertices, faces, material)
+    per_instance = len(template.faces)
+    ids = first_id + np.repeat(np.arange(len(positions)), per_instance)
+    return MeshPart(vertices, faces, material, ids)
+
+
+def _objects(kind: str, parts: list[MeshPart], positions: np.ndarray, yaws: np.ndarray,
+             first_id: int) -> SceneObjects:
+    """Oriented boxes of the objects first_id .. that `parts` build, `kind` for all."""
+    vertices = np.concatenate([p.vertices for p in parts])
+    ids = np.concatenate([_vertex_ids(p) for p in parts]) - first_id
+    return object_boxes(kind, vertices, ids, positions, yaws, first_id)
+
+
+def _vertex_ids(part: MeshPart) -> np.ndarray:
+    """(n,) object id of every vertex of an instanced part (faces never span instances)."""
+    ids = np.empty(len(part.vertices), np.int64)
+    ids[np.asarray(part.faces).reshape(-1)] = np.repeat(np.asarray(part.source), 3)
+    return ids
 
 
 def _box(extent_x: float, extent_y: float, extent_z: float, z_bottom: float) -> trimesh.Trimesh:
@@ -82,25 +116,35 @@ def _stage_sites(cfg: SceneConfig, course: RiverCourse, rng: np.random.Generator
     return np.column_stack([x, y, np.full(k, course.water_level_m)]), yaw, side
 
 
-def landing_stages(cfg: SceneConfig, course: RiverCourse, rng: np.random.Generator):
+def landing_stages(cfg: SceneConfig, course: RiverCourse, rng: np.random.Generator,
+                   first_id: int = 0) -> Props:
     """Pontoons on the water with a gangway to the bank, plus moored vessels alongside."""
     positions, yaws, side = _stage_sites(cfg, course, rng)
     # Pontoon 20 m x 4 m floating with 0.5 m freeboard; gangway reaches 10 m up onto the bank.
     normal = np.column_stack([np.sin(yaws), -np.cos(yaws), np.zeros_like(yaws)])  # to the east
     gangway = positions + normal * side[:, None] * 8.0
-    parts = [
-        _part(_box(20.0, 4.0, 1.2, -0.7), materials.STEEL, positions, yaws),
-        _part(_box(1.5, 12.0, 0.3, 0.5), materials.WOOD, gangway, yaws),
+    stages = [
+        _part(_box(20.0, 4.0, 1.2, -0.7), materials.STEEL, positions, yaws, first_id=first_id),
+        _part(_box(1.5, 12.0, 0.3, 0.5), materials.WOOD, gangway, yaws, first_id=first_id),
     ]
+    objects = _objects("landing_stage", stages, positions, yaws, first_id)
+    parts = list(stages)
     n_vessels = min(cfg.moored_vessels, len(positions))
     if n_vessels:
+        first_vessel = first_id + len(positions)
         hulls = positions[:n_vessels] - normal[:n_vessels] * side[:n_vessels, None] * 3.5
         vessel_yaws = yaws[:n_vessels]
-        parts.append(_part(_box(8.0, 2.6, 1.6, -0.6), materials.VESSEL, hulls, vessel_yaws))
         forward = np.column_stack([np.cos(vessel_yaws), np.sin(vessel_yaws), 0 * vessel_yaws])
         cabins = hulls + forward  # cabin 1 m forward of the hull centre
-        parts.append(_part(_box(3.0, 2.0, 1.5, 1.0), materials.VESSEL, cabins, vessel_yaws))
-    return parts
+        vessels = [
+            _part(_box(8.0, 2.6, 1.6, -0.6), materials.VESSEL, hulls, vessel_yaws,
+                  first_id=first_vessel),
+            _part(_box(3.0, 2.0, 1.5, 1.0), materials.VESSEL, cabins, vessel_yaws,
+                  first_id=first_vessel),
+        ]
+        parts += vessels
+        objects = objects.concat(_objects("vessel", vessels, hulls, vessel_yaws, first_vessel))
+    return Props(parts, objects)
 
 
 def _land_sites(course, field, rng, count, near_m, far_m):
@@ -111,9 +155,11 @@ def _land_sites(course, field, rng, count, near_m, far_m):
     return np.column_stack([x, y, field.height_at(x, y)])
 
 
-def trees_and_houses(cfg: SceneConfig, course: RiverCourse, field: HeightField, rng):
+def trees_and_houses(cfg: SceneConfig, course: RiverCourse, field: HeightField, rng,
+                     first_id: int = 0) -> Props:
     """Trees along the banks and houses a little further up the valley sides."""
-    parts = []
+    parts: list[MeshPart] = []
+    objects = SceneObjects.empty()
     if cfg.trees:
         sites = _land_sites(course, field, rng, cfg.trees, -8.0, 120.0)
         scale = rng.uniform(0.7, 1.3, (cfg.trees, 1)) * np.ones((1, 3))
@@ -122,12 +168,19 @@ def trees_and_houses(cfg: SceneConfig, course: RiverCourse, field: HeightField, 
         trunk.apply_translation((0, 0, 1.5))  # sink 0.25 m into the ground on slopes
         crown = trimesh.creation.icosphere(subdivisions=1, radius=2.5)
         crown.apply_translation((0, 0, 5.0))
-        parts += [_part(trunk, materials.WOOD, sites, yaws, scale),
-                  _part(crown, materials.FOLIAGE, sites, yaws, scale)]
+        trees = [_part(trunk, materials.WOOD, sites, yaws, scale, first_id),
+                 _part(crown, materials.FOLIAGE, sites, yaws, scale, first_id)]
+        parts += trees
+        objects = objects.concat(_objects("tree", trees, sites, yaws, first_id))
     if cfg.houses:
+        first_house = first_id + len(objects)
         sites = _land_sites(course, field, rng, cfg.houses, 40.0, 300.0)
         sites[:, 2] -= 0.5  # foundations into the slope
         yaws = rng.uniform(0, 2 * np.pi, cfg.houses)
-        parts += [_part(_box(10.0, 8.0, 6.5, 0.0), materials.BRICK, sites, yaws),
-                  _part(_roof(10.6, 8.6, 6.5, 3.0), materials.ROOF, sites, yaws)]
-    return parts
+        houses = [_part(_box(10.0, 8.0, 6.5, 0.0), materials.BRICK, sites, yaws,
+                        first_id=first_house),
+                  _part(_roof(10.6, 8.6, 6.5, 3.0), materials.ROOF, sites, yaws,
+                        first_id=first_house)]
+        parts += houses
+        objects = objects.concat(_objects("house", houses, sites, yaws, first_house))
+    return Props(parts, objects)

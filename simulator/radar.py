@@ -3,18 +3,34 @@
 Each beam is `rays_vertical` x `rays_horizontal` rays spread over its elevation and azimuth
 width. Every hit is projected onto the horizontal plane (the height is omitted, as in the
 thesis), binned into (beam, range cell) and contributes its object's reflectance `ref_i`:
-r_cell = sum_i ref_i (eq. 3.5.3). The binning is one `np.bincount`.
+r_cell = sum_i ref_i (eq. 3.5.3). The binning is one `np.bincount`. For the ground truth a
+sweep can also say, per cell, which source (an object, land, water) gave most of its
+reflectance.
 """
 
 from __future__ import annotations
+
+from typing import NamedTuple
 
 import numpy as np
 
 from simulator.config import RadarConfig
 from simulator.frames import Pose2D, rotate_rows, sensor_pose_in_map
 from simulator.messages import header
+from simulator.objects import LAND, NO_RETURN, WATER
 from simulator.raycast import RayCaster, fill_origins
 from simulator.scene import Scene
+
+
+class RadarSweep(NamedTuple):
+    """image : (num_beams, num_cells) float32 reflectance; cell_source : (num_beams,
+    num_cells) int32, the source of most of each cell's reflectance (object id, LAND, WATER,
+    or NO_RETURN where no ray landed; clutter is no source); object_rays : (k,) int64, rays
+    of the sweep that landed in a cell from each of the scene's k objects."""
+
+    image: np.ndarray
+    cell_source: np.ndarray
+    object_rays: np.ndarray
 
 
 class RadarGeometry:
@@ -64,6 +80,17 @@ class Radar:
 
     def sweep(self, scene: Scene, pose: Pose2D) -> np.ndarray:
         """One full turn; returns reflectance : (num_beams, num_cells) float32."""
+        flat, faces = self._cast(scene, pose)
+        return self._image(scene, flat, faces)
+
+    def sweep_with_sources(self, scene: Scene, pose: Pose2D) -> RadarSweep:
+        """`sweep`, plus the dominant source of every cell (for the ground truth)."""
+        flat, faces = self._cast(scene, pose)
+        cell_source, object_rays = self._sources(scene, flat, faces)
+        return RadarSweep(self._image(scene, flat, faces), cell_source, object_rays)
+
+    def _cast(self, scene: Scene, pose: Pose2D) -> tuple[np.ndarray, np.ndarray]:
+        """Rays that landed in a cell: flat cell index (k,) int64 and hit face (k,) int32."""
         cfg, geo = self.cfg, self.geometry
         origin, rotation = sensor_pose_in_map(pose, cfg.mount, scene.water_level_m)
         rotate_rows(geo.directions_sensor, rotation, self._directions_map)
@@ -74,11 +101,39 @@ class Radar:
         cell = np.floor((horizontal_m - cfg.range_min_m) / cfg.range_step_m)
         valid = (prim >= 0) & (cell >= 0) & (cell < geo.num_cells)
         flat = geo.beam_index[valid] * geo.num_cells + cell[valid].astype(np.int64)
-        image = np.bincount(flat, weights=scene.radar_reflectance[prim[valid]],
+        return flat, prim[valid]
+
+    def _image(self, scene: Scene, flat: np.ndarray, faces: np.ndarray) -> np.ndarray:
+        cfg, geo = self.cfg, self.geometry
+        image = np.bincount(flat, weights=scene.radar_reflectance[faces],
                             minlength=geo.num_beams * geo.num_cells).astype(np.float32)
         if cfg.clutter_scale > 0:
             image += self._rng.rayleigh(cfg.clutter_scale, image.shape).astype(np.float32)
         return image.reshape(geo.num_beams, geo.num_cells)
+
+    def _sources(self, scene: Scene, flat: np.ndarray,
+                 faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Per cell the source with the largest summed reflectance, and the rays per object.
+
+        Sources are numbered objects 0..k-1, then land, then water; the (cell, source) pairs
+        of the sweep's few thousand rays are summed with one unique + bincount, and each
+        cell keeps its largest pair (a lexsort), so no (cells x sources) table is built.
+        """
+        geo = self.geometry
+        k = len(scene.objects)
+        source = scene.face_source[faces].astype(np.int64)
+        object_rays = np.bincount(source[source >= 0], minlength=k)[:k]
+        column = np.where(source >= 0, source, np.where(source == LAND, k, k + 1))
+        pairs, inverse = np.unique(flat * (k + 2) + column, return_inverse=True)
+        sums = np.bincount(inverse.reshape(-1), weights=scene.radar_reflectance[faces])
+        cell, column = np.divmod(pairs, k + 2)
+        order = np.lexsort((-sums, cell))  # by cell, the largest sum first
+        first = order[np.r_[True, cell[order][1:] != cell[order][:-1]]] if len(order) else order
+        first = first[sums[first] > 0.0]
+        named = np.full(geo.num_beams * geo.num_cells, NO_RETURN, np.int32)
+        best = column[first]
+        named[cell[first]] = np.where(best < k, best, np.where(best == k, LAND, WATER))
+        return named.reshape(geo.num_beams, geo.num_cells), object_rays
 
     def message(self, image: np.ndarray, stamp_ns: int) -> dict:
         """riverbridge_msgs/msg/RadarImage of a sweep, stamped with its capture time."""

@@ -18,6 +18,7 @@ from embreex.mesh_construction import TriangleMesh
 from simulator import materials
 from simulator.config import SceneConfig
 from simulator.frames import Pose2D
+from simulator.objects import WATER, SceneObjects
 from simulator.props import MeshPart, landing_stages, trees_and_houses
 from simulator.terrain import HeightField, heightfield_mesh, load_terrain
 from simulator.valley import generate_valley
@@ -36,6 +37,8 @@ class Scene:
     lidar_reflectivity : (f,) float32, 0..1 (0 = no LIDAR return)
     colour_rgb : (f, 3) uint8
     face_normals : (f, 3) float32, unit
+    face_source : (f,) int32, the object id (>= 0) of each face, or LAND / WATER
+    objects : the objects those ids name (simulator.objects), the ground truth
     The arrays are read-only; `embree` is safe to query from several threads at once.
     """
 
@@ -46,6 +49,7 @@ class Scene:
         water_level_m: float = 0.0,
         start_pose: Pose2D | None = None,
         terrain: HeightField | None = None,
+        objects: SceneObjects | None = None,
     ) -> None:
         if not parts:
             raise ValueError("a scene needs at least one mesh part")
@@ -63,11 +67,15 @@ class Scene:
         self.colour_rgb = np.repeat(
             np.array([p.material.colour_rgb for p in parts], np.uint8), per_face, axis=0)
         self.face_normals = _unit_normals(self.vertices, self.faces)
+        self.face_source = np.concatenate(
+            [np.broadcast_to(np.asarray(p.source, np.int32), len(p.faces)) for p in parts])
+        self.objects = objects or SceneObjects.empty()
         self.water_level_m = float(water_level_m)
         self.start_pose = start_pose or Pose2D(0.0, 0.0, 0.0)
         self.terrain = terrain
         for array in (self.vertices, self.faces, self.radar_reflectance,
-                      self.lidar_reflectivity, self.colour_rgb, self.face_normals):
+                      self.lidar_reflectivity, self.colour_rgb, self.face_normals,
+                      self.face_source):
             array.setflags(write=False)
         self.embree = rtcore_scene.EmbreeScene()
         TriangleMesh(self.embree, self.vertices, self.faces)
@@ -100,7 +108,7 @@ def terrain_parts(field: HeightField, water_level_m: float) -> list[MeshPart]:
     x1, y1 = x0 + field.extent_m[0], y0 + field.extent_m[1]
     water = np.array([[x0, y0, water_level_m], [x1, y0, water_level_m],
                       [x1, y1, water_level_m], [x0, y1, water_level_m]])
-    parts.append(MeshPart(water, np.array([[0, 1, 2], [0, 2, 3]]), materials.WATER))
+    parts.append(MeshPart(water, np.array([[0, 1, 2], [0, 2, 3]]), materials.WATER, WATER))
     return parts
 
 
@@ -135,11 +143,16 @@ def build_scene(cfg: SceneConfig | None = None, *, seed: int = 7) -> Scene:
                          else cfg.water_level_m)
         course, start = None, deepest_water_pose(field, water_level_m)
     parts = terrain_parts(field, water_level_m)
+    objects = SceneObjects.empty()
     if course is not None:
-        parts += landing_stages(cfg, course, rng) + trees_and_houses(cfg, course, field, rng)
+        stages = landing_stages(cfg, course, rng)
+        rest = trees_and_houses(cfg, course, field, rng, first_id=len(stages.objects))
+        parts += stages.parts + rest.parts
+        objects = stages.objects.concat(rest.objects)
     elif cfg.props_on_loaded_terrain:
         log.warning("props need the procedural river course; none placed on loaded terrain")
-    scene = Scene(parts, water_level_m=water_level_m, start_pose=start, terrain=field)
+    scene = Scene(parts, water_level_m=water_level_m, start_pose=start, terrain=field,
+                  objects=objects)
     log.info("scene: %d triangles, water level %.2f m, start %s",
              scene.triangle_count, water_level_m, start)
     return scene

@@ -13,7 +13,7 @@ from typing import Any
 from bridge.context import Context, PendingGoal
 from bridge.errors import BridgeError, OpFailure
 from bridge.graph import ActionEntry
-from bridge.names import absolute_name
+from bridge.names import absolute_name, allowed
 from bridge.session import ClientSession
 from schemas.errors import SchemaError
 from schemas.message import normalize
@@ -59,8 +59,16 @@ def handle_send_action_goal(ctx: Context, session: ClientSession, op: Any) -> No
         fail_goal(ctx, session.client_id, op.action, op.id, str(exc))
 
 
+def action_name(ctx: Context, raw: str) -> str:
+    """Absolute action name, refused if outside the actions' globs."""
+    name = absolute_name(raw)
+    if not allowed(name, ctx.state.config.action_patterns()):
+        raise OpFailure(f"Action {name} is not allowed by actions_glob")
+    return name
+
+
 def forward_goal(ctx: Context, session: ClientSession, op: Any) -> None:
-    name = absolute_name(op.action)
+    name = action_name(ctx, op.action)
     entry = ctx.state.graph.actions.get(name)
     provider = ctx.state.session_of_node(entry.provider) if entry else None
     if entry is None or provider is None:
@@ -133,7 +141,7 @@ def handle_cancel_action_goal(ctx: Context, session: ClientSession, op: Any) -> 
 
 
 def handle_advertise_action(ctx: Context, session: ClientSession, op: Any) -> None:
-    name = absolute_name(op.action)
+    name = action_name(ctx, op.action)
     if name in ctx.state.graph.actions:
         remove_action(ctx, name, f"Action {name} was advertised again by another provider")
     type_name = normalize_type_name(op.type, "action") if is_valid_type_name(op.type) else None

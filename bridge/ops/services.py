@@ -18,6 +18,7 @@ from bridge.names import absolute_name, allowed
 from bridge.session import ClientSession
 from schemas.errors import SchemaError
 from schemas.message import normalize
+from schemas.ops import MAX_TIMEOUT_S
 from schemas.specs import MessageSpec
 from schemas.typenames import is_valid_type_name, normalize_type_name
 
@@ -92,7 +93,8 @@ def call(ctx: Context, session: ClientSession, name: str, op: Any,
     args = request_fields(ctx, entry.type_name, op.args)
     entry.requests_sent += 1
     request_id = f"service_request:{entry.spelling}:{entry.requests_sent}"
-    timeout_s = op.timeout if op.timeout and op.timeout > 0 else ctx.state.config.call_timeout_s
+    timeout_s = (min(op.timeout, MAX_TIMEOUT_S) if op.timeout and op.timeout > 0
+                 else ctx.state.config.call_timeout_s)
     ctx.state.pending_calls[request_id] = PendingCall(
         name, provider.client_id, session.client_id, call_id, op.service, timeout_s)
     ctx.send(provider.client_id, {"op": "call_service", "id": request_id,

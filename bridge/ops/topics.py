@@ -8,7 +8,7 @@ from bridge.context import Context
 from bridge.errors import GraphConflictError, OpFailure
 from bridge.inbound import PreparedMessage
 from bridge.names import absolute_name, allowed
-from bridge.outgoing import TopicMessage
+from bridge.outgoing import MIN_FRAGMENT_SIZE, TopicMessage
 from bridge.session import ClientSession
 from bridge.subscription import SubscribeSettings, Subscription
 from schemas.errors import SchemaError
@@ -46,7 +46,9 @@ def id_key(raw: Any) -> Any:
 def handle_advertise(ctx: Context, session: ClientSession, op: Any) -> None:
     name = topic_name(ctx, op.topic)
     declare(ctx, name, message_type(ctx, op.type))
-    ctx.state.graph.add_publisher(name, session.node, id_key(op.id), op.latch)
+    entry = ctx.state.graph.add_publisher(name, session.node, id_key(op.id), op.latch)
+    if op.qos:
+        entry.qos[session.node] = op.qos
     session.published.add(name)
 
 
@@ -91,10 +93,11 @@ def handle_publish(ctx: Context, session: ClientSession, op: Any) -> None:
 
 
 def subscribe_settings(op: Any) -> SubscribeSettings:
+    fragment_size = op.fragment_size if op.fragment_size and op.fragment_size > 0 else None
     return SubscribeSettings(
         throttle_ms=max(0, op.throttle_rate or 0),
         queue_length=max(0, op.queue_length or 0),
-        fragment_size=op.fragment_size if op.fragment_size and op.fragment_size > 0 else None,
+        fragment_size=None if fragment_size is None else max(fragment_size, MIN_FRAGMENT_SIZE),
         compression=SubscribeSettings.known_compression(op.compression),
     )
 

@@ -89,8 +89,16 @@ def client_nodes(ctx: Context) -> list[str]:
     return [s.node for s in ctx.state.sessions.values()]
 
 
+def known_nodes(ctx: Context) -> set[str]:
+    """The bridge's nodes, its clients, and every node another middleware (a DDS domain)
+    knows: announced ones and those owning a topic's publisher or subscriber."""
+    graph = ctx.state.graph
+    owners = {node for t in graph.topics.values() for node in (*t.publishers, *t.subscribers)}
+    return {BRIDGE_NODE, ROSAPI_NODE, *client_nodes(ctx), *ctx.state.external_nodes, *owners}
+
+
 def nodes(ctx: Context, request: dict[str, Any]) -> dict[str, Any]:
-    return {"nodes": sorted([BRIDGE_NODE, ROSAPI_NODE, *client_nodes(ctx)])}
+    return {"nodes": sorted(known_nodes(ctx))}
 
 
 def provider_of(ctx: Context, service: str) -> str:
@@ -102,8 +110,7 @@ def provider_of(ctx: Context, service: str) -> str:
 
 def node_details(ctx: Context, request: dict[str, Any]) -> dict[str, Any]:
     node = name_arg(request, "node")
-    known = {BRIDGE_NODE, ROSAPI_NODE, *client_nodes(ctx)}
-    if node not in known:
+    if node not in known_nodes(ctx):
         raise RosapiError(f"Node {node} does not exist")
     publishing, subscribing = ctx.state.graph.node_topics(node)
     provided = [s for s in service_names(ctx) if provider_of(ctx, s) == node]

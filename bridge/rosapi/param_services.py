@@ -12,14 +12,22 @@ from bridge.errors import RosapiError
 from bridge.rosapi.common import table, text_arg
 from schemas import codec_json
 from schemas.errors import DecodeError
+from schemas.safety import echo
 
 PREFIX = "/rosapi"
+# Parameters are kept in the bridge for every client to read: bound what one client can store.
+MAX_PARAMS = 1000
+MAX_PARAM_NAME_CHARS = 256
+MAX_PARAM_VALUE_CHARS = 64 * 1024
 
 
 def param_name(request: dict[str, Any]) -> str:
     name = text_arg(request, "name")
     if not name:
         raise RosapiError("parameter name must not be empty")
+    if len(name) > MAX_PARAM_NAME_CHARS or not name.isprintable():
+        raise RosapiError(f"parameter name {echo(name, 60)} must be at most "
+                          f"{MAX_PARAM_NAME_CHARS} printable characters")
     return name
 
 
@@ -36,6 +44,10 @@ def get_param(ctx: Context, request: dict[str, Any]) -> dict[str, Any]:
 def set_param(ctx: Context, request: dict[str, Any]) -> dict[str, Any]:
     name = param_name(request)
     value = text_arg(request, "value")
+    if len(value) > MAX_PARAM_VALUE_CHARS:
+        raise RosapiError(f"value of {name} is longer than {MAX_PARAM_VALUE_CHARS} characters")
+    if name not in ctx.state.params and len(ctx.state.params) >= MAX_PARAMS:
+        raise RosapiError(f"the bridge keeps at most {MAX_PARAMS} parameters")
     try:
         codec_json.loads(value.encode())
     except DecodeError as exc:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 from bridge_harness import CoreHarness
 
+from bridge.outgoing import MIN_FRAGMENT_SIZE
 from schemas.codec_cdr import from_cdr
 
 
@@ -214,13 +215,24 @@ def test_numeric_sequences_arrive_as_typed_arrays_in_cbor(harness):
 def test_large_text_frames_are_fragmented_with_integer_totals(harness):
     pub, sub = harness.connect(), harness.connect()
     advertise(harness, pub)
-    harness.send(sub, {"op": "subscribe", "topic": "/chatter", "fragment_size": 16})
-    publish(harness, pub, {"data": "x" * 100})
+    harness.send(sub, {"op": "subscribe", "topic": "/chatter", "fragment_size": 1000})
+    publish(harness, pub, {"data": "x" * 2500})
     fragments = harness.outbox(sub)
-    assert {f["op"] for f in fragments} == {"fragment"}
+    assert {f["op"] for f in fragments} == {"fragment"} and len(fragments) == 3
     assert all(isinstance(f["total"], int) and f["total"] == len(fragments) for f in fragments)
     text = "".join(f["data"] for f in sorted(fragments, key=lambda f: f["num"]))
-    assert text == '{"op":"publish","topic":"/chatter","msg":{"data":"' + "x" * 100 + '"}}'
+    assert text == '{"op":"publish","topic":"/chatter","msg":{"data":"' + "x" * 2500 + '"}}'
+
+
+def test_fragment_sizes_below_the_floor_are_raised_to_it(harness):
+    """fragment_size 1 would send one frame per character, each repeating envelope and id."""
+    pub, sub = harness.connect(), harness.connect()
+    advertise(harness, pub)
+    harness.send(sub, {"op": "subscribe", "topic": "/chatter", "fragment_size": 1})
+    publish(harness, pub, {"data": "x" * 2500})
+    fragments = harness.outbox(sub)
+    assert len(fragments) == 3  # 2,553 characters of JSON
+    assert all(len(f["data"]) <= MIN_FRAGMENT_SIZE for f in fragments)
 
 
 def test_huge_fragment_size_means_no_fragmentation(harness):
@@ -341,12 +353,14 @@ def test_topic_glob_gates_advertise_publish_and_subscribe(registry):
 
 def test_fragment_size_in_any_message_applies_to_the_whole_client(harness):
     client = harness.connect()
-    harness.send(client, {"op": "call_service", "service": "/rosapi/get_ros_version",
-                          "fragment_size": 20, "id": "v"})
+    harness.send(client, {"op": "call_service", "service": "/rosapi/message_details",
+                          "args": {"type": "sensor_msgs/msg/Imu"}, "fragment_size": 1000,
+                          "id": "v"})
     fragments = harness.outbox(client)
     assert len(fragments) > 1 and {f["id"] for f in fragments} == {"v"}
     harness.send(client, {"op": "set_level", "level": "none", "fragment_size": None})
-    harness.send(client, {"op": "call_service", "service": "/rosapi/get_ros_version"})
+    harness.send(client, {"op": "call_service", "service": "/rosapi/message_details",
+                          "args": {"type": "sensor_msgs/msg/Imu"}})
     assert harness.outbox(client)[0]["op"] == "service_response"
 
 

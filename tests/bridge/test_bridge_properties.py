@@ -8,9 +8,11 @@ from __future__ import annotations
 
 import asyncio
 import json
+import logging
 import threading
 from collections.abc import Iterator
 
+import cbor2
 import pytest
 from bridge_harness import CoreHarness
 from hypothesis import HealthCheck, given, settings
@@ -18,6 +20,7 @@ from hypothesis import strategies as st
 from websockets.sync.client import connect
 
 from bridge.config import BridgeConfig
+from bridge.outgoing import render
 from bridge.server import run_bridge
 from schemas import codec_cbor
 
@@ -83,6 +86,104 @@ def frames(draw) -> bytes | str:
     if kind == "truncated":
         return encoded[: draw(st.integers(0, max(0, len(encoded) - 1)))]
     return encoded
+
+
+# Values that decode but that nothing downstream could carry: lone surrogates, integers of any
+# size, infinities, CBOR's undefined, sets, tags and non-string keys.
+hostile_scalars = (
+    st.sampled_from(["\ud800", "ok\udfff", "\udc00\ud800"])
+    | st.text(st.characters(codec=None, categories=["Cs", "L", "Nd", "Cc"]), max_size=6)
+    | st.integers() | st.sampled_from([2**64, -(2**63) - 1, 2**100, 10**30])
+    | st.floats() | st.none() | st.booleans()
+)
+hostile_values = st.recursive(
+    hostile_scalars,
+    lambda children: st.lists(children, max_size=4)
+    | st.dictionaries(st.text(max_size=6), children, max_size=4),
+    max_leaves=12,
+)
+cbor_only = st.sampled_from([cbor2.undefined, frozenset({1, 2}), cbor2.CBORTag(999, 1),
+                             cbor2.CBORSimpleValue(99), {1: "x"}, 10**400])
+
+
+def encode_hostile(op: dict, as_cbor: bool) -> bytes | str:
+    """JSON text (lone surrogates escaped, NaN/Infinity tokens) or CBOR of a hostile op."""
+    if as_cbor:
+        try:
+            return cbor2.dumps(op)
+        except (ValueError, TypeError, cbor2.CBOREncodeError):  # surrogates have no UTF-8
+            return cbor2.dumps({"op": "publish", "topic": "/a", "msg": cbor2.undefined})
+    try:
+        return json.dumps(op)
+    except ValueError:  # an integer over 4,300 digits
+        return json.dumps({**op, "msg": None}, default=str)
+
+
+UNTYPED_CALL = {"op": "call_service", "service": "/untyped", "id": 3, "args": {"x": 1}}
+SETUP_OPS = [
+    {"op": "subscribe", "topic": "/a", "type": "std_msgs/String"},
+    {"op": "advertise_service", "service": "/svc", "type": "std_srvs/SetBool"},
+    {"op": "advertise_service", "service": "/untyped", "type": "unknown_pkg/Srv"},
+    {"op": "advertise_action", "action": "/act", "type": "example_interfaces/Fibonacci"},
+]
+
+
+# Ops whose payload reaches another client (a subscriber, a provider): a hostile value there
+# is what once broke the encoder on the way out.
+PAYLOAD_OPS = [
+    ({"op": "publish", "topic": "/a"}, "msg"),
+    ({"op": "call_service", "service": "/untyped", "id": 5}, "args"),
+    ({"op": "call_service", "service": "/svc", "id": 6}, "args"),
+    ({"op": "send_action_goal", "action": "/act", "id": "g", "feedback": True,
+      "action_type": "example_interfaces/Fibonacci"}, "args"),
+    ({"op": "advertise", "topic": "/b", "type": "std_msgs/String"}, "id"),
+]
+
+
+@st.composite
+def hostile_frames(draw) -> bytes | str:
+    """A valid op with header fields, or its payload's fields, replaced by hostile values."""
+    as_cbor = draw(st.booleans())
+    values = hostile_values | cbor_only if as_cbor else hostile_values
+    if draw(st.booleans()):
+        base, payload = draw(st.sampled_from(PAYLOAD_OPS))
+        key = draw(st.sampled_from(["data", "order", "x"]))
+        return encode_hostile({**base, payload: {key: draw(values)}}, as_cbor)
+    op = dict(draw(st.sampled_from([*VALID_OPS, UNTYPED_CALL])))
+    keys = [*(k for k in op if k != "op"), "id", "msg", "args", "values", "fragment_size",
+            "timeout", "total"]
+    for key in draw(st.lists(st.sampled_from(keys), min_size=1, max_size=3)):
+        op[key] = draw(values)
+    return encode_hostile(op, as_cbor)
+
+
+@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(script=st.lists(st.tuples(st.integers(0, 2), hostile_frames(), st.booleans()),
+                       max_size=20))
+def test_hostile_values_get_answers_that_can_be_sent_and_one_short_line(registry, script):
+    records: list[logging.LogRecord] = []
+    handler = logging.Handler()
+    handler.emit = records.append  # type: ignore[method-assign]
+    logger = logging.getLogger("bridge.core")
+    logger.addHandler(handler)
+    try:
+        h = CoreHarness(registry)
+        clients = [h.connect() for _ in range(3)]
+        h.send(clients[0], {"op": "set_level", "level": "info"})
+        for op in SETUP_OPS:  # listeners and providers, so hostile values travel somewhere
+            h.send(clients[2], op)
+        for index, frame, off_loop in script:
+            (h.receive_prepared if off_loop else h.send)(clients[index], frame)
+            for sends in h.sends.values():
+                for send in sends:
+                    render(send.item, send.fragment_size, "f")  # every answer can be sent
+        assert {close.code for close in h.closes} <= {1009}
+        assert_still_serving(h)
+    finally:
+        logger.removeHandler(handler)
+    for record in records:
+        text = record.getMessage()
+        assert record.exc_info is None and len(text) < 700 and text.isprintable(), text
 
 
 def assert_still_serving(h: CoreHarness) -> None:

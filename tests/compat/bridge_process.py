@@ -27,7 +27,7 @@ STARTUP_TIMEOUT_S = 60.0
 # rosbridge-compatible shutdown closes every socket; a few seconds is plenty.
 SHUTDOWN_TIMEOUT_S = 15.0
 
-_LISTENING = re.compile(r"listening on ws://(?P<host>[^\s:/]+):(?P<port>\d+)")
+_LISTENING = re.compile(r"listening on wss?://(?P<host>[^\s:/]+):(?P<port>\d+)")
 
 
 class BridgeStartError(RuntimeError):

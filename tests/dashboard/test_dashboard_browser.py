@@ -129,6 +129,14 @@ def test_topic_list_names_topics_types_rates_and_clients(seen: dict[str, Any]) -
     assert float(imu_row.split("\t")[1]) > 5.0, imu_row
 
 
+def test_restart_counts_of_up_are_shown(seen: dict[str, Any]) -> None:
+    """`up` publishes its restart counts (latched /riverbridge/restarts); none happened."""
+    lines = seen["topics_text"].splitlines()
+    start = lines.index("restarts by riverbridge up")
+    rows = [line.split("\t")[:2] for line in lines[start + 1:start + 4]]
+    assert rows == [["bridge", "0"], ["simulator", "0"], ["navigation", "0"]], lines[start:]
+
+
 def test_latency_panel_joins_trace_spans_per_stage(seen: dict[str, Any]) -> None:
     probe = seen["trace"][PROBE_TOPIC]
     assert probe["generate"] == pytest.approx(12.0, abs=0.01)

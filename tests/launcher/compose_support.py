@@ -17,6 +17,7 @@ import yaml
 from .processes import REPO_ROOT
 
 COMPOSE_FILE = REPO_ROOT / "docker-compose.yml"
+HOST_COMPOSE_FILE = REPO_ROOT / "docker-compose.host.yml"
 DOCKERFILE = REPO_ROOT / "Dockerfile"
 BRIDGE_PORT = 9090  # the port inside the compose network
 CONTAINER_CONFIG_DIR = "/config"
@@ -35,9 +36,11 @@ def interpolate(value: Any, env: Mapping[str, str]) -> Any:
     return value
 
 
-def load_compose(env: Mapping[str, str] | None = None) -> dict[str, Any]:
-    """docker-compose.yml with YAML merge keys resolved and variables from ``env``."""
-    return interpolate(yaml.safe_load(COMPOSE_FILE.read_text()), env or {})
+def load_compose(env: Mapping[str, str] | None = None,
+                 path: Path = COMPOSE_FILE) -> dict[str, Any]:
+    """docker-compose.yml (or ``path``) with YAML merge keys resolved and variables from
+    ``env``."""
+    return interpolate(yaml.safe_load(path.read_text()), env or {})
 
 
 def dockerfile_env() -> dict[str, str]:
@@ -52,11 +55,29 @@ def dockerfile_env() -> dict[str, str]:
     return env
 
 
+def dockerfile_stages() -> dict[str, list[str]]:
+    """The Dockerfile's instructions (continuation lines joined) per stage; stages are named by
+    ``AS name``, the last one (the image) is ``""``; ``ARG``s before the first ``FROM`` are
+    stage ``"global"``."""
+    text = re.sub(r"\\\n", " ", DOCKERFILE.read_text())
+    stages: dict[str, list[str]] = {"global": []}
+    current = "global"
+    for line in text.splitlines():
+        if line.startswith("FROM "):
+            words = line.split()
+            current = words[3] if len(words) >= 4 and words[2].upper() == "AS" else ""
+            stages[current] = []
+        if line and not line.startswith("#"):
+            stages[current].append(line)
+    return stages
+
+
 def dockerfile_copies() -> list[str]:
-    """Sources of the Dockerfile's ``COPY`` lines that feed the build (not ``COPY config``)."""
+    """Sources of the ``COPY`` lines of the ``install`` stage that feed ``pip install .``
+    (not the build configuration, which goes to an absolute path)."""
     sources: list[str] = []
-    for line in DOCKERFILE.read_text().splitlines():
-        if line.startswith("COPY "):
+    for line in dockerfile_stages()["install"]:
+        if line.startswith("COPY ") and "--from=" not in line:
             *parts, destination = shlex.split(line[5:])
             if not destination.startswith("/"):
                 sources.extend(parts)
@@ -68,9 +89,11 @@ def dockerignore_patterns() -> list[str]:
     return [line.strip() for line in lines if line.strip() and not line.startswith("#")]
 
 
-def localize(words: list[str], port: int, config_dir: Path) -> list[str]:
-    """A container command line as a local one: ``python`` is this interpreter, the ``bridge``
-    host and port 9090 are loopback and ``port``, ``/config`` is ``config_dir``."""
+def localize(words: list[str], port: int, config_dir: Path,
+             python: str = sys.executable) -> list[str]:
+    """A container command line as a local one: ``python`` is this interpreter (or
+    ``python``), the ``bridge`` host and port 9090 are loopback and ``port``, ``/config`` is
+    ``config_dir``."""
     address = f"127.0.0.1:{port}"
     local = []
     for word in words:
@@ -81,7 +104,7 @@ def localize(words: list[str], port: int, config_dir: Path) -> list[str]:
             word = str(config_dir / word.removeprefix(CONTAINER_CONFIG_DIR + "/"))
         local.append(word)
     if local[:1] == ["python"]:
-        local[0] = sys.executable
+        local[0] = python
     if "--port" in local and local[local.index("--port") + 1] == str(BRIDGE_PORT):
         local[local.index("--port") + 1] = str(port)
     return local

@@ -24,7 +24,7 @@ from child_process import (  # noqa: F401  (re-exported for the launcher tests)
 )
 
 _STARTED = re.compile(r"\[up\]\s+started (?P<title>\w+) \(pid (?P<pid>\d+)\)")
-_CONNECT = re.compile(r"connect to (?P<url>ws://(?P<host>[\d.]+):(?P<port>\d+))")
+_CONNECT = re.compile(r"connect to (?P<url>wss?://(?P<host>[\d.]+):(?P<port>\d+))")
 
 
 class UpProcess(Running):

@@ -28,8 +28,10 @@ from clients.launcher import (
 
 from .compose_support import (
     COMPOSE_FILE,
+    HOST_COMPOSE_FILE,
     REPO_ROOT,
     dockerfile_env,
+    dockerfile_stages,
     healthcheck_command,
     load_compose,
     localize,
@@ -61,8 +63,9 @@ def validate(path: Path) -> subprocess.CompletedProcess[str]:
                           capture_output=True, text=True, timeout=120)
 
 
-def test_compose_file_validates() -> None:
-    result = validate(COMPOSE_FILE)
+@pytest.mark.parametrize("path", [COMPOSE_FILE, HOST_COMPOSE_FILE], ids=lambda p: p.name)
+def test_compose_file_validates(path: Path) -> None:
+    result = validate(path)
     assert result.returncode == 0, result.stderr
 
 
@@ -113,7 +116,51 @@ def test_image_environment_is_the_launchers() -> None:
     env = dockerfile_env()
     assert {key: env[key] for key in MALLOC_ENV} == dict(MALLOC_ENV)
     assert env["PYTHONUNBUFFERED"] == "1"
-    assert (REPO_ROOT / "Dockerfile").read_text().count("FROM python:3.11-slim") == 1
+    assert "ARG BASE_IMAGE=python:3.11-slim" in dockerfile_stages()["global"]
+
+
+def test_image_serves_the_dashboard_as_a_user_without_the_build_settings() -> None:
+    """The final stage takes the venv and web/dist from the build stages, never the build
+    configuration (pip.conf, npmrc, CA bundle), and drops root."""
+    image = dockerfile_stages()[""]
+    copies = [line for line in image if line.startswith("COPY ")]
+    assert copies == ["COPY --from=install /opt/riverbridge /opt/riverbridge",
+                      "COPY --from=dashboard /web/dist /opt/riverbridge/web",
+                      "COPY config /config"]
+    assert dockerfile_env()["RIVERBRIDGE_WEB_ROOT"] == "/opt/riverbridge/web"
+    assert any(line.startswith("USER ") and line.split()[1] != "root" for line in image)
+    assert image[-1].startswith("CMD ")
+    for stage in ("dashboard", "install"):
+        assert "COPY docker/build-config/ /build-config/" in dockerfile_stages()[stage]
+
+
+def test_build_args_name_the_bases_with_the_dockerfile_defaults() -> None:
+    args = SERVICES["bridge"]["build"]["args"]
+    globals_ = dockerfile_stages()["global"]
+    for name, value in args.items():
+        assert f"ARG {name}={value}" in globals_, name
+
+
+def test_host_network_file_is_the_compose_file_on_loopback() -> None:
+    """docker-compose.host.yml differs from docker-compose.yml only in networking: host
+    network, no published ports, and `bridge:9090` read as 127.0.0.1:$RIVERBRIDGE_PORT."""
+    port = 9191
+    env = {"RIVERBRIDGE_PORT": str(port)}
+    main, host = load_compose(env)["services"], load_compose(env, HOST_COMPOSE_FILE)["services"]
+    assert set(host) == set(main)
+    for name, service in main.items():
+        moved = dict(host[name])
+        assert moved.pop("network_mode") == "host", name
+        build = dict(moved.pop("build"))
+        assert build.pop("network") == "host", name
+        assert build == service["build"], name
+        expected = {key: value for key, value in service.items() if key not in ("ports",
+                                                                                "build")}
+        as_local = {
+            "command": localize(service["command"], port, Path("/config"), python="python"),
+            "healthcheck": {**service["healthcheck"], "test": ["CMD", *localize(
+                healthcheck_command(service), port, Path("/config"), python="python")]}}
+        assert moved == {**expected, **as_local}, name
 
 
 def test_shipped_example_configs_load_as_the_defaults() -> None:

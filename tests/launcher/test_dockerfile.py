@@ -46,6 +46,13 @@ def build_context(target: Path) -> None:
                 shutil.copy2(path, target / relative)
 
 
+def source_packages() -> list[str]:
+    """Dotted names of the checkout's packages and subpackages (folders with __init__.py)."""
+    tops = ("bridge", "clients", "navigation", "schemas", "simulator")
+    return sorted(".".join(init.parent.relative_to(REPO_ROOT).parts)
+                  for top in tops for init in (REPO_ROOT / top).rglob("__init__.py"))
+
+
 def run(*argv: str, cwd: Path, env: dict[str, str]) -> subprocess.CompletedProcess[str]:
     result = subprocess.run(argv, cwd=cwd, env=env, capture_output=True, text=True, timeout=300)
     assert result.returncode == 0, f"{' '.join(argv)}:\n{result.stdout}\n{result.stderr}"
@@ -75,13 +82,18 @@ def test_the_image_install_step_yields_a_working_package(tmp_path: Path) -> None
         env={**env, "PYTHONPATH": ""})
     run(*pip, "install", "--no-deps", "--target", str(site), *map(str, wheels.glob("*.whl")),
         cwd=elsewhere, env=env)
-    probe = ("import bridge, clients, navigation, schemas, simulator, riverbridge\n"
+    # Every package and subpackage of the checkout must come from the installation: the
+    # shared editable install would otherwise supply a subpackage the wheel left out.
+    packages = ["riverbridge", *source_packages()]
+    probe = ("import importlib, sys\n"
              "from schemas.registry import TypeRegistry\n"
-             "for module in (bridge, clients, navigation, schemas, simulator, riverbridge):\n"
-             "    print(module.__file__)\n"
+             "for name in sys.argv[1:]:\n"
+             "    print(importlib.import_module(name).__file__)\n"
              "TypeRegistry.with_defaults().message('riverbridge_msgs/msg/RadarImage')\n")
-    located = run(sys.executable, "-c", probe, cwd=elsewhere, env=env).stdout.split()
-    assert len(located) == 6 and all(path.startswith(str(site)) for path in located), located
+    located = run(sys.executable, "-c", probe, *packages, cwd=elsewhere, env=env).stdout.split()
+    outside = [(name, path) for name, path in zip(packages, located, strict=True)
+               if not path.startswith(str(site))]
+    assert len(located) == len(packages) and not outside, outside
     bridge = Running([sys.executable, "-m", "bridge", "--host", "127.0.0.1", "--port", "0"],
                      env=env, cwd=elsewhere)
     try:

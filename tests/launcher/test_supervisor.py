@@ -8,11 +8,13 @@ command line is not available.
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import io
 import logging
 import os
 import signal
 import socket
+import urllib.request
 from collections.abc import Iterator
 from dataclasses import replace
 
@@ -95,7 +97,8 @@ async def test_runs_until_stopped_then_exits_0_leaving_no_process(output: io.Str
 
 
 async def test_a_dying_component_stops_the_rest_and_is_named(output: io.StringIO) -> None:
-    harness = Harness(bridge_and_navigation(), CONFIG, output)
+    config = CONFIG.model_copy(update={"restart": "never"})
+    harness = Harness(bridge_and_navigation(config), config, output)
     await asyncio.wait_for(asyncio.shield(harness.ready), 180.0)
     nav_pid = harness.supervisor.children[1].pid
     os.kill(nav_pid, signal.SIGKILL)
@@ -127,3 +130,38 @@ async def test_a_bridge_that_cannot_listen_is_reported(output: io.StringIO) -> N
         assert await harness.finish() == 1
     assert "bridge exited with code" in output.getvalue()
     assert len(harness.pids()) == 1  # navigation was never started
+
+
+async def restart_counts_in_metrics(url: str, wanted: dict[str, int],
+                                    timeout_s: float = 60.0) -> str:
+    """GET /metrics until it shows `wanted` restarts per component; the page."""
+    metrics_url = url.replace("ws://", "http://") + "/metrics"
+    deadline = asyncio.get_running_loop().time() + timeout_s
+    while True:
+        with contextlib.suppress(OSError):
+            page = await asyncio.to_thread(
+                lambda: urllib.request.urlopen(metrics_url, timeout=5).read().decode())
+            if all(f'riverbridge_component_restarts_total{{component="{c}"}} {float(n)}' in page
+                   for c, n in wanted.items()):
+                return page
+        assert asyncio.get_running_loop().time() < deadline, f"no {wanted} in /metrics"
+        await asyncio.sleep(0.5)
+
+
+async def test_killed_components_are_restarted_counted_and_work(output: io.StringIO) -> None:
+    harness = Harness(bridge_and_navigation(), CONFIG, output)
+    url = await asyncio.wait_for(asyncio.shield(harness.ready), 180.0)
+    for title in ("navigation", "bridge"):
+        [child] = [c for c in harness.supervisor.children if c.component.title == title]
+        os.kill(child.pid, signal.SIGKILL)
+        await restart_counts_in_metrics(url, {title: 1})
+    grid = await first_message(url, "/nav/obstacle_map", "nav_msgs/msg/OccupancyGrid")
+    assert grid["info"]["width"] > 0
+    await restart_counts_in_metrics(url, {"bridge": 1, "navigation": 1})
+    harness.stop.set()
+    assert await harness.finish() == 0, output.getvalue()
+    text = output.getvalue()
+    assert "navigation was killed by SIGKILL (exit code -9); restarting it in 0.25 s (restart 1)" \
+        in text
+    assert "bridge was killed by SIGKILL (exit code -9); restarting it in 0.25 s" in text
+    assert wait_gone(harness.pids()) == []

@@ -25,6 +25,11 @@ from .processes import REPO_ROOT, repo_env
         (["--startup-timeout", "soon"], "--startup-timeout"),
         (["--stop-timeout", "-1"], "--stop-timeout"),
         (["--frobnicate"], "--frobnicate"),
+        (["--restart", "sometimes"], "--restart"),
+        (["--auth-secret-file", "/nonexistent/secret"], "--auth-secret-file"),
+        (["--certfile", "/nonexistent/cert.pem"], "--certfile"),
+        (["--certfile", __file__], "--certfile/--keyfile"),
+        (["--max-clients", "0"], "--max-clients"),
     ],
 )
 def test_bad_option_exits_2_naming_it(argv: list[str], option: str,
@@ -61,3 +66,29 @@ def test_defaults_are_rosbridges_port_on_loopback_with_cbor() -> None:
     config = up_cli.config_from_args(up_cli.build_parser().parse_args([]))
     assert (config.host, config.port, config.encoding) == ("127.0.0.1", 9090, "cbor")
     assert config.sim_config is None and config.nav_config is None
+
+
+def test_access_options_reach_the_bridge_and_the_clients(tmp_path) -> None:
+    from clients.connection import AUTH_SECRET_ENV
+    from clients.launcher import access_environment, stack_components
+
+    secret, cert, key = (tmp_path / name for name in ("secret", "cert.pem", "key.pem"))
+    for path in (secret, cert, key):
+        path.write_text("x\n")
+    args = up_cli.build_parser().parse_args(
+        ["--auth-secret-file", str(secret), "--certfile", str(cert), "--keyfile", str(key),
+         "--allowed-origins", "https://*.example.org", "--max-clients", "20",
+         "--restart", "always"])
+    config = up_cli.config_from_args(args)
+    assert config.restart == "always" and config.scheme == "wss"
+    bridge = stack_components(config)[0]
+    assert bridge.args[4:] == (
+        "--auth-secret-file", str(secret.resolve()), "--certfile", str(cert.resolve()),
+        "--keyfile", str(key.resolve()), "--allowed-origins", "https://*.example.org",
+        "--max-clients", "20")
+    assert access_environment(config) == {AUTH_SECRET_ENV: str(secret.resolve()),
+                                          "SSL_CERT_FILE": str(cert.resolve())}
+
+
+def test_restart_defaults_to_on_failure() -> None:
+    assert up_cli.config_from_args(up_cli.build_parser().parse_args([])).restart == "on-failure"

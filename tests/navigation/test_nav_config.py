@@ -11,8 +11,10 @@ from navigation.config import CfarConfig, NavigationConfig, load_config
 def test_defaults_are_the_thesis_values():
     config = NavigationConfig()
     assert (config.lidar.eps_m, config.lidar.min_samples, config.lidar.box_max_size_m) == (1, 10, 3)
-    assert 2 * config.cfar.training_cells_per_side == 100  # table 4.2, read as a total
-    assert 2 * config.cfar.guard_cells_per_side == 10
+    assert 2 * config.cfar.guard_cells_per_side == 10  # table 4.2, read as a total
+    # table 4.2's 100 training cells do not fit a ring of 72 beams; 61 cells do beside them
+    assert config.cfar.axis == "azimuth"
+    assert 2 * (config.cfar.training_cells_per_side + config.cfar.guard_cells_per_side) + 1 <= 72
     assert (config.cfar.detector, config.cfar.false_alarm_rate) == ("soca", 0.1)
     camera = config.camera
     assert (camera.canny_threshold1, camera.canny_threshold2) == (170, 260)
@@ -23,12 +25,12 @@ def test_toml_overrides_nested_values(tmp_path):
     path = tmp_path / "nav.toml"
     path.write_text(
         '[lidar]\nvoxel_size_m = 0.3\nmethod = "birch"\n[lidar.ground]\nwater_level_z_m = -2.0\n'
-        '[cfar]\ndetector = "os"\nos_rank = 60\n'
+        '[cfar]\ndetector = "os"\nos_rank = 50\n'
     )
     config = load_config(path)
     assert config.lidar.voxel_size_m == 0.3 and config.lidar.method == "birch"
     assert config.lidar.ground.water_level_z_m == -2.0
-    assert config.cfar.os_rank == 60 and config.camera.threshold == 190
+    assert config.cfar.os_rank == 50 and config.camera.threshold == 190
 
 
 def test_lidar_worker_defaults_to_a_process_and_names_only_known_kinds():
@@ -47,7 +49,7 @@ def test_wrong_field_is_named(tmp_path):
 
 def test_invalid_values_are_refused():
     with pytest.raises(pydantic.ValidationError, match="os_rank"):
-        CfarConfig(os_rank=101)
+        CfarConfig(os_rank=61)
     with pytest.raises(pydantic.ValidationError):
         CfarConfig(false_alarm_rate=1.5)
 

@@ -10,6 +10,7 @@ from collections.abc import AsyncIterator
 from typing import Any
 
 import pytest
+from prometheus_client.parser import text_string_to_metric_families
 
 from bridge.config import BridgeConfig
 from bridge.server import run_bridge
@@ -156,9 +157,12 @@ async def test_stats_service_metrics_and_client_count(bridge):
     assert answer["messages_in"][row] == 3 and answer["payload_bytes_in"][row] == 3 * 316
     assert answer["clients"] == 2 and len(answer["client_nodes"]) == 2
     assert own["process"] == "bridge" and own["rss_bytes"] > 0
-    assert 'riverbridge_messages_total{topic="/imu/data",direction="in"} 3' in metrics
-    assert "# TYPE riverbridge_clients gauge" in metrics
-    assert "riverbridge_process_resident_memory_bytes" in metrics
+    families = {f.name: f for f in text_string_to_metric_families(metrics)}
+    assert {(s.labels["topic"], s.labels["direction"]): s.value
+            for s in families["riverbridge_messages"].samples}[(IMU[0], "in")] == 3
+    assert families["riverbridge_clients"].type == "gauge"
+    assert families["riverbridge_process_resident_memory_bytes"].samples[0].value > 0
+    assert families["process_cpu_seconds"].samples[0].value > 0
 
 
 def fetch(url: str) -> str:

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from clients.report_cli import main
+from clients.report_cli import main, profile_sim_config
 
 SENSORS = {"/lidar/points": 2.0, "/radar/image": 2.0, "/camera/image/compressed": 2.0,
            "/imu/data": 50.0}
@@ -23,10 +23,32 @@ STAGES = ("generate", "publish_wait", "encode", "send", "pub_to_bridge", "bridge
     (["--json", "/no/such/folder/r.json"], "--json"),
     (["--bridge", "localhost:9090"], "--bridge"),
     (["--sim-config", "/no/such.toml"], "--sim-config"),
+    (["--profile", "fast"], "--profile"),
 ])
 def test_bad_options_name_the_option_and_exit_2(argv, option, capsys):
     assert main(argv) == 2
     assert option in capsys.readouterr().err
+
+
+def test_a_profile_the_sim_config_sets_itself_is_refused(tmp_path, capsys):
+    config = tmp_path / "sim.toml"
+    config.write_text('profile = "default"\n')
+    assert main(["--profile", "thesis", "--sim-config", str(config)]) == 2
+    assert "--profile" in capsys.readouterr().err
+
+
+def test_the_thesis_profile_goes_ahead_of_the_users_settings(tmp_path):
+    mine = tmp_path / "mine.toml"
+    mine.write_text("seed = 3\n[lidar]\nwater_model = \"mesh\"\n")
+    assert profile_sim_config("default", mine, tmp_path) == mine
+    assert profile_sim_config("default", None, tmp_path) is None
+    written = profile_sim_config("thesis", mine, tmp_path)
+    assert written is not None and written.parent == tmp_path
+    from simulator.config import load_config
+
+    config = load_config(written)
+    assert (config.profile, config.seed, config.lidar.point_fields, config.lidar.water_model) == (
+        "thesis", 3, "xyz", "mesh")
 
 
 def test_unreachable_bridge_fails_with_1(capsys, tmp_path):
@@ -37,16 +59,35 @@ def test_unreachable_bridge_fails_with_1(capsys, tmp_path):
 
 
 @pytest.mark.slow
-@pytest.mark.timeout(150)
-def test_a_ten_second_report_is_complete_and_consistent(tmp_path: Path):
+@pytest.mark.timeout(200)
+def test_a_report_of_both_profiles_is_complete_and_consistent(tmp_path: Path):
     out = tmp_path / "r.json"
     done = subprocess.run(
-        [sys.executable, "-m", "clients.report_cli", "--duration", "10", "--warmup", "3",
-         "--json", str(out), "--log", str(tmp_path / "stack.log")],
-        capture_output=True, text=True, timeout=140, cwd=Path(__file__).resolve().parents[2])
+        [sys.executable, "-m", "clients.report_cli", "--duration", "8", "--warmup", "3",
+         "--profile", "default,thesis", "--json", str(out), "--log", str(tmp_path / "stack.log")],
+        capture_output=True, text=True, timeout=190, cwd=Path(__file__).resolve().parents[2])
     assert done.returncode == 0, done.stderr[-2000:] + (tmp_path / "stack.log").read_text()[-3000:]
-    assert "/lidar/points" in done.stdout and "thesis 86 ms" in done.stdout
-    (run,) = json.loads(out.read_text())["runs"]
+    assert "/lidar/points" in done.stdout and "thesis Ø 86 ms (table A.1 5b)" in done.stdout
+    document = json.loads(out.read_text())
+    run, thesis = document["runs"]
+    assert (run["profile"], run["water_model"], thesis["profile"]) == ("default", "mesh", "thesis")
+    assert thesis["water_model"] == "specular" and thesis["point_fields"] == "xyz"
+    # the thesis profile sends about the thesis's 285.37 KB per scan (table 4.9)
+    assert 0.8 * 285_370 < thesis["topics"]["/lidar/points"]["payload_bytes_mean"] < 1.2 * 285_370
+    rows = document["thesis_comparison"]
+    assert {r["run"] for r in rows} == {"cbor", "thesis/cbor"}
+    assert all(r["source"] and r["statistic"] for r in rows)
+    for each in (run, thesis):
+        quality = each["detection_quality"]
+        assert quality["lidar"]["precision"] >= 0.9 and quality["lidar"]["recall"] >= 0.8
+        assert quality["radar"]["precision"] >= 0.9 and quality["radar"]["recall"] >= 0.8
+        radar = quality["radar"]
+        assert radar["open_water_false_alarm_rate"] <= radar["configured_false_alarm_rate"]
+        network = each["network"]
+        assert set(network["stack_bytes_per_s_by_process"]) == {"bridge", "simulator",
+                                                                "navigation"}
+        # every hop at least once: the sensor payload reaches the bridge and goes on
+        assert network["stack_over_sensor_payload"] > 1.5
     assert run["encoding"] == "cbor" and len(run["hosts"]) == 1
     for topic, rate_hz in SENSORS.items():
         summary = run["topics"][topic]

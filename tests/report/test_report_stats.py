@@ -17,11 +17,10 @@ from clients.report import (
     network_summary,
     percentiles,
     process_summary,
-    render_comparison,
-    render_run,
     spans_of_batch,
     summarise,
 )
+from clients.report_text import render_comparison, render_run
 
 MS = 1_000_000
 TOPIC = "/lidar/points"
@@ -101,6 +100,10 @@ def test_summary_counts_rate_misses_bytes_and_thesis():
     assert topic["result_deadline_misses"] == 1
     assert topic["overhead_in"] == pytest.approx(1.01)
     assert topic["thesis"][TRANSPORT] == 86.0 and topic["thesis"]["process.boxes"] == 186.0
+    assert topic["thesis"]["statistic"] == "mean"  # appendix A's Ø
+    assert topic["thesis"]["sources"][TRANSPORT] == "table A.1 5b"
+    assert topic["thesis"]["not_comparable"] == ["process.dbscan", "process.boxes"]
+    assert topic["payload_bytes_mean"] == pytest.approx(1000.0)
     assert topic["unprocessed"] == 0
 
 
@@ -153,6 +156,22 @@ def test_process_and_network_summaries():
     network = network_summary(topics, loopback_bytes=None, duration_s=10.0)
     assert network["sensor_wire_over_payload"] == pytest.approx((20_200 + 1900) / 21_000)
     assert network["wire_over_payload"] == pytest.approx((22_100 + 2200) / 23_000)
+    assert math.isnan(network["stack_over_sensor_payload"]), "no socket counters given"
+
+
+def test_the_network_overhead_the_thesis_way_counts_every_socket_byte_over_sensor_payload():
+    """Table 4.10 over 4.9: all the stack sent (every hop) / the four streams' payload."""
+    topics = {"/lidar/points": {"payload_bytes": 10_000, "wire_in_bytes": 10_100, "rate_hz": 2.0},
+              "/nav/boxes": {"payload_bytes": 500, "wire_in_bytes": 900, "rate_hz": 2.0}}
+    sockets = {"stack_bytes": 600_000, "instrument_bytes": 5_000,
+               "by_process": {"bridge": 250_000, "simulator": 300_000, "navigation": 50_000}}
+    network = network_summary(topics, loopback_bytes=1_000_000, duration_s=10.0, sockets=sockets)
+    assert network["stack_bytes_per_s"] == pytest.approx(60_000.0)
+    assert network["stack_over_sensor_payload"] == pytest.approx(3.0)  # 60 kB/s / 20 kB/s
+    assert network["loopback_over_sensor_payload"] == pytest.approx(5.0)
+    assert network["stack_bytes_per_s_by_process"]["simulator"] == pytest.approx(30_000.0)
+    assert network["report_connection_bytes_per_s"] == pytest.approx(500.0)
+    assert network["thesis"]["overhead"] == pytest.approx(1.62e6 / 291.27e3)
 
 
 def test_tables_render_every_stage_and_the_comparison():
@@ -160,8 +179,27 @@ def test_tables_render_every_stage_and_the_comparison():
     run = {"encoding": "cbor", "duration_s": 2.5, "hosts": ["host"],
            "topics": summarise(spans, 2.5), "samples": {TOPIC: "10 points x 16 B"}}
     text = render_run(run)
-    for stage in ("generate", "bridge_to_sub", "process.dbscan", TRANSPORT, "thesis 86 ms"):
+    for stage in ("generate", "bridge_to_sub", "process.dbscan", TRANSPORT,
+                  "thesis Ø 86 ms (table A.1 5b)", "mean", "encoding ratio"):
         assert stage in text
+    assert "thesis Ø 29 ms (table A.1 3f) NOT COMPARABLE" in text
     assert "10 points x 16 B" in text
-    comparison = render_comparison([run, {**run, "encoding": "json"}])
-    assert "cbor" in comparison and "json" in comparison and "wire/payload" in comparison
+    comparison = render_comparison([run, {**run, "encoding": "json"},
+                                    {**run, "profile": "thesis"}])
+    header = comparison.splitlines()[0]
+    assert "cbor" in header and "json" in header and "thesis/cbor" in header
+    assert "transport mean ms" in comparison and "table A.1 5b" in comparison
+    assert "network overhead" in comparison and "5.56x" in comparison
+
+
+def test_plots_are_written_per_run_and_topic(tmp_path):
+    from clients.report import by_topic, stage_values
+    from clients.report_plots import write_plots
+
+    spans = [s for k in range(5) for s in path_spans(10**18 + k * 500 * MS)]
+    values = {t: stage_values(items) for t, items in by_topic(journeys(spans)).items()}
+    run = {"encoding": "cbor", "topics": summarise(spans, 2.5), "samples": {}, "_values": values}
+    written = write_plots([run, {**run, "profile": "thesis"}], tmp_path)
+    names = sorted(p.name for p in written)
+    assert names == ["bytes.png", "cbor_lidar_points.png", "thesis-cbor_lidar_points.png"]
+    assert all(p.stat().st_size > 1000 for p in written)

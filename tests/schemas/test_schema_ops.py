@@ -35,6 +35,9 @@ CLIENT_FRAMES = {
     "roslibpy cancel_action_goal": '{"op": "cancel_action_goal", '
     '"id": "send_action_goal:/fib:7", "action": "/fibonacci"}',
     "roslibpy set_level": '{"op": "set_level", "level": "error", "id": 1}',
+    "roslibpy auth": '{"op": "auth", "mac": "ab12", "client": "192.168.1.101", '
+                     '"dest": "192.168.1.111", "rand": "xyz", "t": 1700000000.5, '
+                     '"level": "admin", "end": 1700003600}',
     "roslibjs subscribe cbor": '{"op":"subscribe","id":"subscribe:/scan:0b1c","type":'
     '"sensor_msgs/msg/LaserScan","topic":"/scan","compression":"cbor","throttle_rate":0,'
     '"queue_length":0}',
@@ -96,6 +99,7 @@ def test_every_op_has_a_model():
         "png",
         "set_level",
         "status",
+        "auth",
         "send_action_goal",
         "cancel_action_goal",
         "action_feedback",
@@ -235,7 +239,8 @@ def test_several_problems_are_counted_in_the_same_line():
         (None, "expected a JSON object with an 'op' field, got NoneType"),
         ({"topic": "/x"}, "message has no 'op' field (keys: ['topic'])"),
         ({"op": 3}, "field 'op' must be a string, got 3"),
-        ({"op": "auth", "id": 9}, "unknown op 'auth'"),
+        ({"op": "authenticate", "id": 9}, "unknown op 'authenticate'"),
+        ({"op": "auth", "id": 9}, "auth: field 'mac' is required (and 6 more problem(s))"),
     ],
 )
 def test_non_ops(obj, message):
@@ -290,7 +295,7 @@ def test_models_are_frozen():
     {"op": "publish", "topic": "/t", "msg": {"data": 1}},
     {"op": "publish", "topic": "t", "msg": None, "id": "p:1", "latch": True},
     {"op": "publish", "topic": "/t", "queue_size": 5, "type": "std_msgs/String", "extra": 1},
-    {"op": "publish", "topic": "/t", "msg": {}, "id": {"any": "json"}},
+    {"op": "publish", "topic": "/t", "msg": {}, "id": 7.5},
 ])
 def test_parse_publish_reads_what_parse_op_reads(obj):
     fast, full = ops.parse_publish(obj), parse_op(obj)
@@ -306,6 +311,9 @@ def test_parse_publish_reads_what_parse_op_reads(obj):
     {"op": "publish", "topic": "/t", "latch": 1},
     {"op": "publish", "topic": "/t", "queue_size": True},
     {"op": "publish", "topic": "/t", "type": 3},
+    {"op": "publish", "topic": "/t", "msg": {}, "id": {"any": "json"}},
+    {"op": "publish", "topic": "/t", "id": "i" * 301},
+    {"op": "publish", "topic": "/" + "t" * 600},
 ])
 def test_parse_publish_refuses_like_parse_op(obj):
     with pytest.raises(OpError) as fast:

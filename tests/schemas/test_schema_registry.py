@@ -44,11 +44,14 @@ SHIPPED_SERVICES = [
 RIVERBRIDGE_MSGS = [
     "Box",
     "BoxArray",
+    "GroundTruthArray",
+    "GroundTruthObject",
     "ImageLine",
     "ImageLineArray",
     "RadarDetection",
     "RadarDetectionArray",
     "RadarImage",
+    "RadarTarget",
 ]
 
 

@@ -13,8 +13,9 @@ from bridge.server import run_bridge
 from clients import RosbridgeClient
 from simulator.cli import main
 from simulator.config import CameraConfig, LidarConfig, SceneConfig, SimConfig
-from simulator.node import COMMAND, TF_STATIC, TOPICS, serve
+from simulator.node import COMMAND, GROUND_TRUTH, TF_STATIC, TOPICS, TRUTH_TOPICS, serve
 from simulator.scene import build_scene
+from simulator.truth import TRUTH_TYPE
 
 pytestmark = pytest.mark.slow
 
@@ -51,12 +52,17 @@ async def test_every_topic_arrives_typed_and_stamped(bridge, registry, encoding)
         subs = {name: await listener.subscribe(topic, type_name, maxsize=100)
                 for name, (topic, type_name) in TOPICS.items()}
         static = await listener.subscribe(*TF_STATIC)
+        truth = {name: await listener.subscribe(topic, TRUTH_TYPE, maxsize=10)
+                 for name, topic in TRUTH_TOPICS.items()}
         sim = asyncio.create_task(serve(bridge.url, LIGHT, stop, encoding=encoding, scene=scene))
         try:
             imu = await collect(subs["imu"], 20, timeout_s=10.0)
             others = {name: await collect(subs[name], 1, timeout_s=10.0)
                       for name in ("lidar", "radar", "camera", "gnss", "odom", "tf")}
             tf_static = await collect(static, 1, timeout_s=5.0)
+            truths = {name: await collect(sub, 1, timeout_s=5.0) for name, sub in truth.items()}
+            # latched: a late subscriber still gets the scene's objects
+            markers = await collect(await listener.subscribe(*GROUND_TRUTH), 1, timeout_s=5.0)
             publishers = {topic: (await listener.call_service(
                 "/rosapi/publishers", {"topic": topic}))["publishers"]
                 for topic in (TOPICS["lidar"][0], TOPICS["imu"][0], TOPICS["odom"][0])}
@@ -80,6 +86,10 @@ async def test_every_topic_arrives_typed_and_stamped(bridge, registry, encoding)
     assert 51.0 < others["gnss"][0]["latitude"] < 52.0
     frames = {t["child_frame_id"] for t in tf_static[0]["transforms"]}
     assert frames == {"lidar", "radar", "camera_optical", "imu", "gnss"}
+    assert len(markers[0]["markers"]) == len(scene.objects) > 0
+    lidar_truth, radar_truth = truths["lidar"][0], truths["radar"][0]
+    assert lidar_truth["header"]["frame_id"] == "lidar" and lidar_truth["sensor"] == "lidar"
+    assert radar_truth["cell_source"].size == others["radar"][0]["reflectance"].size
 
 
 async def test_wrench_command_drives_the_vessel(bridge, registry):

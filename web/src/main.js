@@ -31,6 +31,7 @@ const SUBSCRIPTIONS = {
   "/nav/obstacle_map": ["nav_msgs/msg/OccupancyGrid", 250],
   "/riverbridge/trace": ["riverbridge_msgs/msg/TraceSpanArray", 0],
   "/riverbridge/process_stats": ["riverbridge_msgs/msg/ProcessStats", 0],
+  "/riverbridge/restarts": ["diagnostic_msgs/msg/DiagnosticArray", 0], // latched, from `up`
 };
 const LIDAR = { topic: "/lidar/points", messageType: "sensor_msgs/msg/PointCloud2",
   throttleMs: 250, maxPoints: 40000 }; // 40k of a ~180k scan: more adds no visible detail
@@ -113,6 +114,7 @@ function messageHandlers(panels, trace, vessel) {
     "/nav/obstacle_map": (m) => panels.map.onGrid(m),
     "/riverbridge/trace": (m) => trace.onSpans(m),
     "/riverbridge/process_stats": (m) => panels.topics.onProcessStats(m),
+    "/riverbridge/restarts": (m) => panels.topics.onRestarts(m),
   };
 }
 

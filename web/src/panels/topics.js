@@ -1,5 +1,6 @@
 // Topics with their types and the rates this page receives them at, the connected clients
-// (rosapi `topics`, `nodes`), and each process's CPU, memory and drops (/riverbridge/process_stats).
+// (rosapi `topics`, `nodes`), each process's CPU, memory and drops (/riverbridge/process_stats)
+// and how often `riverbridge up` restarted each component (/riverbridge/restarts).
 const POLL_MS = 2000;
 const MIB = 1024 * 1024;
 
@@ -11,12 +12,20 @@ export class TopicsPanel {
     this.topics = [];
     this.nodes = [];
     this.processes = new Map(); // process name -> latest ProcessStats
+    this.restarts = []; // [component, restarts, message] from the latest restarts report
     this.lastPollMs = -Infinity;
     this.polling = false;
   }
 
   onProcessStats(message) {
     this.processes.set(`${message.process} (${message.pid})`, message);
+  }
+
+  onRestarts(message) {
+    this.restarts = message.status.map((status) => {
+      const count = status.values.find((kv) => kv.key === "restarts")?.value ?? "0";
+      return [status.name.replace(/^up\//, ""), Number(count), status.message];
+    });
   }
 
   draw(nowMs) {
@@ -56,6 +65,13 @@ export class TopicsPanel {
       for (const [name, s] of this.processes) {
         rows.push(`<tr><td>${esc(name)}</td><td class="num">${s.dropped}</td>` +
           `<td>${Number(s.cpu_percent).toFixed(0)} % · ${(Number(s.rss_bytes) / MIB).toFixed(0)} MiB</td></tr>`);
+      }
+    }
+    if (this.restarts.length > 0) {
+      rows.push("<tr class=\"section\"><td colspan=\"3\">restarts by riverbridge up</td></tr>");
+      for (const [name, count, message] of this.restarts) {
+        rows.push(`<tr${count > 0 ? " class=\"stale\"" : ""}><td>${esc(name)}</td>` +
+          `<td class="num restarts">${count}</td><td>${esc(message)}</td></tr>`);
       }
     }
     this.element.innerHTML = `<table id="topics-table">${rows.join("")}</table>`;

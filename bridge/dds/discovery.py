@@ -1,0 +1,165 @@
+"""What the DDS domain holds, in ROS terms: topics, services and the nodes owning them.
+
+Cyclone's built-in discovery topics tell which participants and endpoints exist (a
+`Snapshot`); ROS 2's `ros_discovery_info` tells which node of a participant owns which
+endpoint. `DomainView` combines them. An endpoint that no `ros_discovery_info` claims (a
+plain DDS program) is owned by its participant's only node if it has exactly one, else by a
+name made from the participant: `/dds_participant_<8 hex digits>`. Pure: no Cyclone here.
+"""
+
+from __future__ import annotations
+
+import zlib
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field
+
+from bridge.dds.naming import (
+    node_name,
+    parse_dds_topic,
+    service_type_of_part,
+    type_from_dds,
+)
+from bridge.dds.qos import DEFAULT, QosProfile
+
+
+@dataclass(frozen=True)
+class Endpoint:
+    """A remote reader or writer as discovery announced it."""
+
+    guid: bytes
+    participant: bytes
+    dds_topic: str
+    dds_type: str
+    is_writer: bool
+    qos: QosProfile = DEFAULT
+    user_data: str = ""
+
+
+@dataclass(frozen=True)
+class Snapshot:
+    """Remote participants and endpoints alive at one moment."""
+
+    participants: frozenset[bytes] = frozenset()
+    endpoints: tuple[Endpoint, ...] = ()
+
+
+@dataclass(frozen=True)
+class NodeEntities:
+    """One ROS 2 node of a participant (`ros_discovery_info`) and the endpoints it owns."""
+
+    name: str
+    readers: frozenset[bytes] = frozenset()
+    writers: frozenset[bytes] = frozenset()
+
+
+@dataclass
+class RemoteTopic:
+    """A ROS topic seen on the domain: type, publishing nodes (with their writers' QoS),
+    subscribing nodes."""
+
+    name: str
+    type_name: str
+    publishers: dict[str, list[QosProfile]] = field(default_factory=dict)
+    subscribers: set[str] = field(default_factory=set)
+
+
+@dataclass(frozen=True)
+class RemoteService:
+    """A ROS service server seen on the domain (request reader + reply writer of one node)."""
+
+    name: str
+    type_name: str
+    node: str
+
+
+def participant_node(participant: bytes) -> str:
+    """The node name given to endpoints of a participant that announces no nodes."""
+    return f"/dds_participant_{zlib.crc32(participant[:12]):08x}"
+
+
+def nodes_from_discovery_info(msg: Mapping) -> tuple[bytes, tuple[NodeEntities, ...]]:
+    """(participant gid, its nodes) from a canonical `ParticipantEntitiesInfo` message."""
+    def gids(items: Iterable[Mapping]) -> frozenset[bytes]:
+        return frozenset(bytes(item["data"]) for item in items)
+
+    nodes = tuple(NodeEntities(node_name(n["node_namespace"], n["node_name"]),
+                               gids(n["reader_gid_seq"]), gids(n["writer_gid_seq"]))
+                  for n in msg["node_entities_info_seq"])
+    return bytes(msg["gid"]["data"]), nodes
+
+
+class DomainView:
+    """The latest snapshot and `ros_discovery_info` per participant, read as a ROS graph."""
+
+    def __init__(self) -> None:
+        self.snapshot = Snapshot()
+        self.node_info: dict[bytes, tuple[NodeEntities, ...]] = {}
+        self._by_guid: dict[bytes, Endpoint] = {}
+
+    def update_snapshot(self, snapshot: Snapshot) -> None:
+        self.snapshot = snapshot
+        self._by_guid = {e.guid: e for e in snapshot.endpoints}
+        for gone in set(self.node_info) - snapshot.participants:
+            del self.node_info[gone]
+
+    def update_nodes(self, participant: bytes, nodes: tuple[NodeEntities, ...]) -> None:
+        self.node_info[participant] = nodes
+
+    def owner(self, endpoint: Endpoint) -> str:
+        """The ROS node that owns `endpoint`."""
+        nodes = self.node_info.get(endpoint.participant, ())
+        for node in nodes:
+            if endpoint.guid in (node.writers if endpoint.is_writer else node.readers):
+                return node.name
+        if len(nodes) == 1:
+            return nodes[0].name
+        return participant_node(endpoint.participant)
+
+    def writer_node(self, guid: bytes | None) -> str | None:
+        """The node owning the remote writer `guid`, None if discovery does not know it."""
+        endpoint = self._by_guid.get(guid) if guid is not None else None
+        return self.owner(endpoint) if endpoint is not None else None
+
+    def announced_nodes(self) -> set[str]:
+        """The ROS 2 nodes remote participants announce in `ros_discovery_info`."""
+        return {node.name for nodes in self.node_info.values() for node in nodes}
+
+    def topics(self) -> dict[str, RemoteTopic]:
+        """ROS topics on the domain by name; a name seen with two types keeps the first."""
+        found: dict[str, RemoteTopic] = {}
+        for endpoint in self.snapshot.endpoints:
+            meaning = parse_dds_topic(endpoint.dds_topic)
+            type_name = type_from_dds(endpoint.dds_type)
+            if meaning is None or meaning.role != "topic" or type_name is None:
+                continue
+            topic = found.setdefault(meaning.ros_name, RemoteTopic(meaning.ros_name, type_name))
+            if topic.type_name != type_name:
+                continue
+            node = self.owner(endpoint)
+            if endpoint.is_writer:
+                topic.publishers.setdefault(node, []).append(endpoint.qos)
+            else:
+                topic.subscribers.add(node)
+        return found
+
+    def services(self) -> dict[str, RemoteService]:
+        """Service servers: a node with a reader on `rq/<s>Request` and a writer on
+        `rr/<s>Reply`."""
+        requests: dict[tuple[str, str], str] = {}
+        replies: set[tuple[str, str]] = set()
+        for endpoint in self.snapshot.endpoints:
+            meaning = parse_dds_topic(endpoint.dds_topic)
+            part = type_from_dds(endpoint.dds_type)
+            split = service_type_of_part(part) if part else None
+            if meaning is None or split is None:
+                continue
+            key = (meaning.ros_name, self.owner(endpoint))
+            if meaning.role == "request" and not endpoint.is_writer:
+                requests[key] = split[0]
+            elif meaning.role == "reply" and endpoint.is_writer:
+                replies.add(key)
+        servers: dict[str, RemoteService] = {}
+        for (name, node), type_name in sorted(requests.items()):
+            if (name, node) in replies and name not in servers:
+                servers[name] = RemoteService(name, type_name, node)
+        return servers

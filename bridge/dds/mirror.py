@@ -1,0 +1,234 @@
+"""`DdsMirror`: the bridge as one ROS 2 node of a DDS domain (`--dds`, docs/ros2.md).
+
+The mirror lives on the event loop and changes the core only the ways a client could:
+`publish_external` for samples from the domain, in-process clients for services, plain
+graph entries for remote publishers and subscribers. Cyclone's side runs on two threads of
+its own: the pump (takes and decodes samples, reads discovery) and the writer (encodes and
+writes); both reach the loop only through `call_soon_threadsafe`.
+
+What goes where:
+- a message a websocket client publishes goes to DDS once, on the topic's one writer;
+- a sample from DDS is published into the bridge as its remote node's; the mirror's sink
+  ignores what it injected itself and whatever the bridge publishes on its own account, and
+  its readers ignore the participant's own writers, so nothing echoes and a message crosses
+  each bridge once however many bridges share a domain;
+- every `RECONCILE_S` (and soon after a discovery change or a first message) the endpoints
+  are brought in step with the graph: topics clients publish get writers, topics clients
+  subscribe to get readers, client-provided services get DDS servers, remote services get
+  stand-ins, remote endpoints appear in the graph.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import logging
+import time
+from typing import TYPE_CHECKING, Any
+
+from bridge.dds.announce import Announcer
+from bridge.dds.cyclone_xml import CycloneSettings
+from bridge.dds.discovery import DomainView, NodeEntities, Snapshot, participant_node
+from bridge.dds.graph_sync import GraphSync
+from bridge.dds.outbox import Outbox, WriterThread
+from bridge.dds.participant import DdsParticipant, Pump
+from bridge.dds.qos import QosProfile, advertised_profile, reader_profile, strongest
+from bridge.dds.service_mirror import ServiceMirror
+from bridge.dds.topic_mirror import Arrival, TopicMirror, Wanted
+from bridge.errors import BridgeError, DdsStartError
+from schemas.errors import SchemaError
+
+if TYPE_CHECKING:
+    from bridge.context import Context
+    from bridge.graph import TopicEntry
+    from bridge.outgoing import TopicMessage
+    from bridge.server import BridgeServer
+
+logger = logging.getLogger("bridge.dds")
+
+RECONCILE_S = 0.1  # how late a new advertisement or subscription reaches DDS at most
+
+
+class DdsMirror:
+    """Joins `server`'s graph to DDS domain `config.dds_domain`; `start()`, then `stop()`."""
+
+    def __init__(self, server: BridgeServer) -> None:
+        self.server = server
+        self.core = server.core
+        self.config = server.config
+        self.registry = self.core.state.registry
+        self.view = DomainView()
+        self.graph_sync = GraphSync()
+        self._injecting = False
+        self._waiting_first: dict[str, TopicMessage] = {}
+        self._qos_warned: set[tuple[str, str]] = set()
+        self._task: asyncio.Task[None] | None = None
+        self._wake = asyncio.Event()
+
+    async def start(self) -> None:
+        loop = self._loop = asyncio.get_running_loop()
+        settings = CycloneSettings(self.config.dds_interface, self.config.dds_peers,
+                                   self.config.dds_multicast)
+        try:
+            self.participant = DdsParticipant(self.config.dds_domain, settings,
+                                              self.config.dds_tuned)
+        except Exception as exc:  # Cyclone says little more than "non-specific error"
+            raise DdsStartError(
+                f"cannot join DDS domain {self.config.dds_domain} on interface "
+                f"{settings.interface!r} (does it exist and have an address?): {exc}") from exc
+        try:
+            self._assemble(loop)
+        except Exception as exc:  # e.g. a type Cyclone refuses: leave the domain again
+            self.participant.close()
+            raise DdsStartError(f"cannot set up the DDS mirror: {exc!r}") from exc
+        self.core.add_sink(self)
+        self.writer.start()
+        self.pump.start()
+        self._task = asyncio.create_task(self._reconcile_forever(), name="bridge-dds")
+        logger.info("DDS: domain %d on interface %s (peers %s, multicast %s) as node %s",
+                    self.config.dds_domain, settings.interface,
+                    ", ".join(settings.effective_peers()) or "none", settings.multicast,
+                    self.node)
+
+    def _assemble(self, loop: asyncio.AbstractEventLoop) -> None:
+        """The mirror's parts on the joined participant (no thread started yet)."""
+        node = self.config.dds_node or f"riverbridge_{self.participant.short_id()}"
+        self.node = node if node.startswith("/") else "/" + node
+        self.outbox = Outbox()
+        self.writer = WriterThread(self.outbox)
+        self.pump = Pump(self.participant)
+        to_loop = loop.call_soon_threadsafe
+        self.topics = TopicMirror(self.participant, self.pump, self.outbox, self.registry,
+                                  lambda arrivals: to_loop(self._inject, arrivals))
+        self.services = ServiceMirror(self.core, self.server.apply, self.server.internal_clients,
+                                      self.participant, self.pump, self.outbox, self.registry,
+                                      self.node, to_loop)
+        self.announcer = Announcer(self.participant, self.pump, self.outbox, self.registry,
+                                   self.node, lambda p, n: to_loop(self._nodes_seen, p, n))
+        for condition in self.participant.discovery_conditions:
+            self.pump.watch(condition, self._take_discovery)
+
+    async def stop(self) -> None:
+        if self._task is not None:
+            self._task.cancel()
+            with contextlib.suppress(asyncio.CancelledError):
+                await self._task
+        with contextlib.suppress(ValueError):
+            self.core.state.sinks.remove(self)
+        self.pump.stop()
+        self.writer.stop()
+        self.services.close()
+        self.topics.close()
+        self.announcer.close()
+        self.graph_sync.clear(self.core.state.graph)
+        self.core.state.external_nodes.clear()
+        self.participant.close()
+
+    # -- the sink: local messages out --------------------------------------------------------
+
+    def accept(self, ctx: Context, message: TopicMessage, origin_node: str) -> None:
+        """Every message published in the graph: send those of websocket clients to DDS."""
+        if self._injecting or origin_node not in self.local_nodes():
+            return
+        if not self.topics.send(message) and not self.topics.refused(message.topic):
+            self._waiting_first[message.topic] = message  # its writer is made next
+            self._wake.set()
+
+    def local_nodes(self) -> set[str]:
+        """Nodes of the websocket clients (not the mirror's own in-process clients)."""
+        own = self.services.client_ids
+        return {s.node for s in self.core.state.sessions.values() if s.client_id not in own}
+
+    # -- the domain's messages in ------------------------------------------------------------
+
+    def _inject(self, arrivals: list[Arrival]) -> None:
+        local = self.local_nodes()
+        for arrival in arrivals:
+            reader = self.topics.readers.get(arrival.topic)
+            node = self.view.writer_node(arrival.writer_guid)
+            if node is None or node in local:
+                node = participant_node(arrival.writer_guid or b"")
+            latch = reader is not None and reader.wanted.profile.transient_local
+            self._injecting = True
+            try:
+                effects = self.core.publish_external(node, arrival.topic, arrival.type_name,
+                                                     arrival.msg, time.time_ns(), arrival.cdr,
+                                                     latch=latch)
+            except (BridgeError, SchemaError) as exc:
+                logger.warning("DDS: sample on %s not published: %s", arrival.topic, exc)
+                continue
+            finally:
+                self._injecting = False
+            self.graph_sync.noted_publisher(arrival.topic, node)
+            self.server.apply(effects)
+
+    # -- discovery ---------------------------------------------------------------------------
+
+    def _take_discovery(self) -> Any:
+        snapshot = self.participant.snapshot()
+        return lambda: self._loop.call_soon_threadsafe(self._snapshot_seen, snapshot)
+
+    def _snapshot_seen(self, snapshot: Snapshot) -> None:
+        self.view.update_snapshot(snapshot)
+        self._wake.set()
+
+    def _nodes_seen(self, participant: bytes, nodes: tuple[NodeEntities, ...]) -> None:
+        self.view.update_nodes(participant, nodes)
+        self._wake.set()
+
+    # -- keeping DDS in step with the graph --------------------------------------------------
+
+    async def _reconcile_forever(self) -> None:
+        while True:
+            try:
+                self.reconcile()
+            except Exception:  # a bug here must not end the mirror
+                logger.exception("DDS: reconcile failed")
+            with contextlib.suppress(TimeoutError):
+                async with asyncio.timeout(RECONCILE_S):
+                    await self._wake.wait()
+            self._wake.clear()
+
+    def reconcile(self) -> None:
+        """Bring writers, readers, services and the graph's remote half in step."""
+        state = self.core.state
+        local = self.local_nodes()
+        remote_topics = self.view.topics()
+        writers, readers = self._wanted_topics(local, remote_topics)
+        self.topics.sync(writers, readers)
+        for message in self._waiting_first.values():
+            self.topics.send(message)
+        self._waiting_first.clear()
+        self.graph_sync.apply(state.graph, remote_topics, local)
+        state.external_nodes = self.view.announced_nodes()
+        provided = {name: entry.type_name for name, entry in state.graph.services.items()
+                    if entry.provider in local and entry.type_name}
+        self.services.sync(provided, self.view.services())
+        topic_readers, topic_writers = self.topics.endpoint_guids()
+        service_readers, service_writers = self.services.guids()
+        self.announcer.announce(topic_readers + service_readers, topic_writers + service_writers)
+
+    def _wanted_topics(self, local: set[str], remote: dict) -> tuple[dict[str, Wanted],
+                                                                      dict[str, Wanted]]:
+        writers: dict[str, Wanted] = {}
+        readers: dict[str, Wanted] = {}
+        for entry in self.core.state.graph.topics.values():
+            if entry.type_name is None:
+                continue
+            publishing = [node for node in entry.publishers if node in local]
+            if publishing:
+                profiles = [self._advertised(entry, node) for node in publishing]
+                writers[entry.name] = Wanted(entry.type_name, strongest(profiles))
+            if any(node in local for node in entry.subscribers):
+                seen = remote.get(entry.name)
+                offered = [p for ps in seen.publishers.values() for p in ps] if seen else []
+                readers[entry.name] = Wanted(entry.type_name, reader_profile(offered))
+        return writers, readers
+
+    def _advertised(self, entry: TopicEntry, node: str) -> QosProfile:
+        profile, problem = advertised_profile(node in entry.latching, entry.qos.get(node))
+        if problem and (entry.name, node) not in self._qos_warned:
+            self._qos_warned.add((entry.name, node))
+            logger.warning("[%s] op=advertise topic=%s: %s; the DDS writer takes ROS 2's "
+                           "default QoS", node, entry.name, problem)
+        return profile

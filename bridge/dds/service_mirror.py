@@ -1,0 +1,192 @@
+"""Services across the bridge and the DDS domain, through the core's own call routing.
+
+Both directions reuse what the core already does for websocket clients, with in-process
+clients that the mirror drives (`BridgeCore.connect(node=...)`; the server hands their sends
+to the mirror instead of a socket):
+
+- A service a websocket client provides is offered on DDS (`ServiceServer`). A DDS request
+  becomes a `call_service` from the mirror's caller client (the bridge's DDS node); the
+  provider's `service_response` comes back to it and goes out as the DDS reply.
+- A service a remote node provides is advertised in the bridge by a stand-in client named
+  like that node (`/add_two_ints_server`). The core forwards local calls to the stand-in as
+  `call_service`; the mirror sends them as DDS requests and answers with the reply's values.
+  The core keeps its timeouts; when the remote server goes away the stand-in unadvertises,
+  which fails the calls still waiting.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from collections.abc import Callable
+from typing import Any
+
+from bridge.core import BridgeCore
+from bridge.dds.discovery import RemoteService
+from bridge.dds.outbox import Outbox
+from bridge.dds.participant import DdsParticipant, Pump
+from bridge.dds.request_header import RequestId
+from bridge.dds.service_endpoints import ServiceClient, ServiceServer
+from bridge.effects import Effect, Send
+from bridge.outgoing import ControlMessage
+from schemas.errors import SchemaError
+from schemas.registry import TypeRegistry
+
+logger = logging.getLogger("bridge.dds")
+
+Apply = Callable[[list[Effect]], None]
+ToLoop = Callable[..., object]  # loop.call_soon_threadsafe
+
+
+class ServiceMirror:
+    """Keeps DDS service endpoints and stand-in clients in step with both graphs."""
+
+    def __init__(self, core: BridgeCore, apply: Apply, internal: dict[int, Callable],
+                 participant: DdsParticipant, pump: Pump, outbox: Outbox,
+                 registry: TypeRegistry, node: str, to_loop: ToLoop) -> None:
+        self._core, self._apply, self._internal = core, apply, internal
+        self._participant, self._pump, self._outbox = participant, pump, outbox
+        self._registry, self._to_loop = registry, to_loop
+        self.caller = core.connect("dds", node)
+        internal[self.caller] = self._caller_receives
+        self.client_ids = {self.caller}
+        self.servers: dict[str, ServiceServer] = {}
+        self.clients: dict[str, ServiceClient] = {}
+        self.stand_ins: dict[str, int] = {}  # remote node -> its stand-in client id
+        self._remote: dict[str, RemoteService] = {}
+        self._from_dds: dict[str, tuple[ServiceServer, RequestId]] = {}
+        self._to_dds: dict[tuple[str, int], tuple[int, Any, Any]] = {}
+        self._calls = 0
+        self._refused: set[str] = set()
+
+    # -- keeping in step ---------------------------------------------------------------------
+
+    def sync(self, local: dict[str, str], remote: dict[str, RemoteService]) -> bool:
+        """`local`: services websocket clients provide (name -> type); `remote`: servers on
+        the domain. Returns True if DDS endpoints were created or deleted."""
+        changed = False
+        for name in [n for n, s in self.servers.items() if local.get(n) != s.type_name]:
+            self.servers.pop(name).close()
+            changed = True
+        for name, type_name in local.items():
+            if name not in self.servers:
+                server = self._open(ServiceServer, name, type_name, self._on_request)
+                if server is not None:
+                    self.servers[name] = server
+                    changed = True
+        wanted = {n: s for n, s in remote.items() if n not in local}
+        for name in [n for n, s in self._remote.items() if wanted.get(n) != s]:
+            changed |= self._withdraw(name)
+        for name, service in wanted.items():
+            if name not in self._remote:
+                changed |= self._adopt(service)
+        return changed
+
+    def _open(self, kind: type, name: str, type_name: str, received: Callable) -> Any:
+        try:
+            return kind(self._participant, self._pump, self._outbox, self._registry, name,
+                        type_name, lambda *args: self._to_loop(received, *args))
+        except (SchemaError, ValueError) as exc:  # an unknown type, a Cyclone refusal
+            if name not in self._refused:
+                self._refused.add(name)
+                logger.warning("DDS: service %s (%s) is not mirrored: %s", name, type_name, exc)
+            return None
+
+    def _adopt(self, service: RemoteService) -> bool:
+        """Advertise a remote server's service through a stand-in named like its node."""
+        if any(s.node == service.node for s in self._core.state.sessions.values()
+               if s.client_id not in self.client_ids):
+            return False  # a websocket client has that node name; never impersonate it
+        client = self._open(ServiceClient, service.name, service.type_name, self._on_reply)
+        if client is None:
+            return False
+        stand_in = self.stand_ins.get(service.node)
+        if stand_in is None:
+            stand_in = self._core.connect("dds", service.node)
+            self.stand_ins[service.node] = stand_in
+            self.client_ids.add(stand_in)
+            self._internal[stand_in] = self._stand_in_receives
+        self.clients[service.name] = client
+        self._remote[service.name] = service
+        self._send(stand_in, {"op": "advertise_service", "service": service.name,
+                              "type": service.type_name})
+        return True
+
+    def _withdraw(self, name: str) -> bool:
+        service = self._remote.pop(name)
+        client = self.clients.pop(name, None)
+        if client is not None:
+            client.close()
+        for key in [k for k in self._to_dds if k[0] == name]:  # unadvertising fails them
+            del self._to_dds[key]
+        stand_in = self.stand_ins.get(service.node)
+        if stand_in is None:
+            return client is not None
+        self._send(stand_in, {"op": "unadvertise_service", "service": name})
+        if not any(s.node == service.node for s in self._remote.values()):
+            del self.stand_ins[service.node]
+            self.client_ids.discard(stand_in)
+            self._apply(self._core.disconnect(stand_in, time.time_ns()))
+            self._internal.pop(stand_in, None)
+        return True
+
+    def _send(self, client_id: int, op: dict[str, Any]) -> None:
+        self._apply(self._core.receive_decoded(client_id, op, time.time_ns()))
+
+    def guids(self) -> tuple[list[bytes], list[bytes]]:
+        """(reader GUIDs, writer GUIDs) of every service endpoint."""
+        pairs = [e.guids() for e in [*self.servers.values(), *self.clients.values()]]
+        return [r for r, _ in pairs], [w for _, w in pairs]
+
+    def close(self) -> None:
+        self.sync({}, {})
+        self._internal.pop(self.caller, None)
+        self._apply(self._core.disconnect(self.caller, time.time_ns()))
+
+    # -- DDS clients calling local providers ------------------------------------------------
+
+    def _on_request(self, service: str, request: RequestId, msg: dict[str, Any]) -> None:
+        server = self.servers.get(service)
+        if server is None:
+            return
+        self._calls += 1
+        call_id = f"dds:{self._calls}"
+        self._from_dds[call_id] = (server, request)
+        self._send(self.caller, {"op": "call_service", "service": service, "args": msg,
+                                 "id": call_id})
+
+    def _caller_receives(self, send: Send) -> None:
+        payload = send.item.payload if isinstance(send.item, ControlMessage) else {}
+        waiting = self._from_dds.pop(str(payload.get("id")), None)
+        if payload.get("op") != "service_response" or waiting is None:
+            return
+        server, request = waiting
+        if payload.get("result") is True and isinstance(payload.get("values"), dict):
+            server.send(request, payload["values"])
+        else:  # ROS 2 services have no error reply: the DDS client waits or times out
+            logger.warning("DDS: call to %s from DDS failed, no reply sent: %s",
+                           server.service, payload.get("values"))
+
+    # -- local callers using remote servers -------------------------------------------------
+
+    def _stand_in_receives(self, send: Send) -> None:
+        payload = send.item.payload if isinstance(send.item, ControlMessage) else {}
+        if payload.get("op") != "call_service":
+            return
+        name = payload.get("service")
+        client = self.clients.get(name if isinstance(name, str) and name.startswith("/")
+                                  else f"/{name}")
+        if client is None:
+            return
+        request = client.request(payload.get("args") or {})
+        self._to_dds[(client.service, request.sequence)] = (
+            send.client_id, payload.get("id"), payload.get("service"))
+
+    def _on_reply(self, service: str, request: RequestId, msg: dict[str, Any]) -> None:
+        waiting = self._to_dds.pop((service, request.sequence), None)
+        if waiting is None:
+            return
+        stand_in, request_id, spelling = waiting
+        if stand_in in self._internal:
+            self._send(stand_in, {"op": "service_response", "id": request_id,
+                                  "service": spelling, "values": msg, "result": True})

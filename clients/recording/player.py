@@ -1,0 +1,273 @@
+"""Publish an MCAP recording into a bridge at its recorded timing (rate-scaled, looped).
+
+Timing: message *i* is published ``(log_time_i - log_time_0) / rate`` after the start of the
+pass, on the event loop's clock; ``--loop`` starts a new pass after the last message.
+
+Stamps (``header.stamp``, in every nested header, e.g. each transform of a TFMessage), chosen
+with ``stamps``:
+
+- ``shift`` (default): every stamp moves by the same offset, the one that maps the pass's
+  first ``log_time`` to the wall clock when the pass starts (at ``rate`` != 1 stamps are
+  scaled about that point too). A stamp then still means *capture time*, on today's clock:
+  the gap between a message's stamp and its publication is the one recorded, so latencies
+  measured downstream (``riverbridge report --replay``) are from capture as in the live run.
+- ``now``: every stamp becomes the wall-clock time of its publication; latencies then start
+  at the player, without the recorded capture-to-bridge part.
+- ``keep``: the recorded stamps, unchanged (consumers that key on stamps see the old times).
+
+Decoding CDR into the canonical form (rosbags) runs on a worker thread ahead of the schedule;
+a type the local registry does not know is registered from the recording's own definition.
+Each topic has its own sender task, so a 5 MB scan being encoded and sent never delays the
+IMU samples scheduled behind it; small topics go over the process's realtime connection and
+large ones over the bulk connection (:mod:`clients.node_links`).
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import functools
+import logging
+import time
+from collections import deque
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Literal
+
+from rosbags.typesys import get_types_from_msg
+from rosbags.typesys.base import TypesysError
+
+from clients.client import RosbridgeClient
+from clients.node_links import node_links
+from clients.recording.reading import RecordedMessage, read_recording
+from clients.recording.topics import BRIDGE_OWNED, TopicFilter
+from schemas.codec_cdr import from_cdr
+from schemas.errors import SchemaError
+from schemas.interface_files import InterfaceSet
+from schemas.registry import TypeRegistry
+
+log = logging.getLogger(__name__)
+
+NS_PER_S = 1_000_000_000
+StampMode = Literal["shift", "now", "keep"]
+STAMP_MODES: tuple[StampMode, ...] = ("shift", "now", "keep")
+# Messages decoded ahead of their time: a few seconds of the full stack, a handful of scans.
+LOOKAHEAD = 256
+BATCH = 16  # messages decoded per worker-thread hop
+BULK_BYTES = 64 * 1024  # from this size a topic goes over the bulk connection
+LATCHED = ("/tf_static",)  # topics the simulator latches; replayed latched too
+
+
+@dataclass
+class PlayStats:
+    """What a replay did: messages per topic, passes, how late publishing ran."""
+
+    passes: int = 0
+    messages: dict[str, int] = field(default_factory=dict)
+    max_late_s: float = 0.0
+    skipped_topics: dict[str, str] = field(default_factory=dict)
+
+    @property
+    def total(self) -> int:
+        return sum(self.messages.values())
+
+
+@dataclass(frozen=True, slots=True)
+class Scheduled:
+    """A decoded message and when (offset in the pass, s) it is due."""
+
+    topic: str
+    type_name: str
+    msg: dict[str, Any]
+    due_s: float
+    size: int
+    first_log_ns: int  # the pass's first log_time, which due_s counts from
+
+
+def restamp(msg: Any, change: Callable[[int], int]) -> None:
+    """Apply ``change`` (ns -> ns) to every ``header.stamp`` in ``msg``, in place.
+
+    Walks nested messages and lists of messages, never numeric arrays."""
+    if isinstance(msg, dict):
+        header = msg.get("header")
+        if isinstance(header, dict) and isinstance(header.get("stamp"), dict):
+            stamp = header["stamp"]
+            sec, nanosec = divmod(change(int(stamp["sec"]) * NS_PER_S + int(stamp["nanosec"])),
+                                  NS_PER_S)
+            header["stamp"] = {"sec": sec, "nanosec": nanosec}
+        for value in msg.values():
+            if isinstance(value, dict | list):
+                restamp(value, change)
+    elif isinstance(msg, list) and msg and isinstance(msg[0], dict):
+        for item in msg:
+            restamp(item, change)
+
+
+def ensure_type(registry: TypeRegistry, type_name: str, definition: str) -> None:
+    """Register ``type_name`` from its full ``ros2msg`` text unless it is already known.
+
+    Raises :class:`SchemaError` when the text does not parse or clashes with known types."""
+    if registry.has_message(type_name):
+        return
+    try:
+        types = get_types_from_msg(definition, type_name)
+    except TypesysError as exc:
+        raise SchemaError(f"the recording's definition of {type_name} does not parse: "
+                          f"{exc}") from None
+    registry.add_interfaces(InterfaceSet(types=types))
+
+
+class Player:
+    """Publishes the recording at ``path`` into the bridge at ``url``."""
+
+    def __init__(self, url: str, path: Path, *, topics: TopicFilter | None = None,
+                 rate: float = 1.0, loop: bool = False, stamps: StampMode = "shift",
+                 registry: TypeRegistry | None = None, connect_timeout_s: float = 10.0) -> None:
+        if not rate > 0:
+            raise ValueError(f"rate must be positive, got {rate}")
+        self.url, self.path, self.rate, self.loop, self.stamps = url, path, rate, loop, stamps
+        self.topics = topics or TopicFilter(excluded=BRIDGE_OWNED)
+        self.registry = registry or TypeRegistry.with_defaults()
+        self.stats = PlayStats()
+        self._connect_timeout_s = connect_timeout_s
+        self._senders: dict[str, tuple[asyncio.Queue[Scheduled | None], asyncio.Task[None]]] = {}
+
+    async def run(self, stop: asyncio.Event) -> PlayStats:
+        """Play until the recording ends (or ``stop``; with ``loop``, only ``stop``)."""
+        async with node_links(self.url, "player",
+                              connect_timeout_s=self._connect_timeout_s) as links:
+            try:
+                while not stop.is_set():
+                    played = await self._one_pass(stop, links.bulk, links.realtime)
+                    self.stats.passes += 1
+                    if not self.loop or not played:
+                        break
+                await self._drain_senders()
+            finally:
+                for _, task in self._senders.values():
+                    task.cancel()
+                await asyncio.gather(*(t for _, t in self._senders.values()),
+                                     return_exceptions=True)
+        return self.stats
+
+    async def _one_pass(self, stop: asyncio.Event, bulk: RosbridgeClient,
+                        realtime: RosbridgeClient) -> int:
+        """Publish the recording once; the number of messages published.
+
+        The clock starts once the first ``LOOKAHEAD`` messages are decoded and their topics
+        advertised, so neither delays the first messages."""
+        loop = asyncio.get_running_loop()
+        queue: asyncio.Queue[Scheduled | None] = asyncio.Queue(LOOKAHEAD)
+        reader = asyncio.create_task(self._decode_into(queue))
+        played = 0
+        try:
+            ahead = await self._prefetch(queue)
+            for item in ahead:
+                if item is not None:
+                    await self._sender(item, bulk, realtime)
+            start_s, start_wall_ns = loop.time(), time.time_ns()
+            while (item := ahead.popleft() if ahead else await queue.get()) is not None:
+                delay_s = start_s + item.due_s - loop.time()
+                if delay_s > 0:
+                    with contextlib.suppress(TimeoutError):
+                        await asyncio.wait_for(stop.wait(), delay_s)
+                if stop.is_set():
+                    break
+                self.stats.max_late_s = max(self.stats.max_late_s, -delay_s)
+                if self.stamps == "shift":
+                    restamp(item.msg, functools.partial(
+                        _shifted, start_wall_ns, item.first_log_ns, self.rate))
+                (await self._sender(item, bulk, realtime)).put_nowait(item)
+                played += 1
+        finally:
+            reader.cancel()
+            await asyncio.gather(reader, return_exceptions=True)
+        return played
+
+    @staticmethod
+    async def _prefetch(queue: asyncio.Queue[Scheduled | None]) -> deque[Scheduled | None]:
+        """The first ``LOOKAHEAD`` items (fewer if the recording ends first)."""
+        ahead: deque[Scheduled | None] = deque()
+        while len(ahead) < LOOKAHEAD and (not ahead or ahead[-1] is not None):
+            ahead.append(await queue.get())
+        return ahead
+
+    async def _decode_into(self, queue: asyncio.Queue[Scheduled | None]) -> None:
+        """Read and decode on a worker thread, ``BATCH`` messages per hop, into ``queue``."""
+        messages = read_recording(self.path, self.topics)
+        first: list[int] = []
+        try:
+            while batch := await asyncio.to_thread(self._decode_batch, messages, first):
+                for item in batch:
+                    await queue.put(item)
+        finally:
+            messages.close()
+        await queue.put(None)
+
+    def _decode_batch(self, messages: Iterator[RecordedMessage],
+                      first: list[int]) -> list[Scheduled]:
+        batch: list[Scheduled] = []
+        for recorded in messages:
+            if not first:
+                first.append(recorded.log_time_ns)
+            item = self._decode(recorded, first[0])
+            if item is not None:
+                batch.append(item)
+            if len(batch) >= BATCH:
+                break
+        return batch
+
+    def _decode(self, recorded: RecordedMessage, first_ns: int) -> Scheduled | None:
+        topic = recorded.topic
+        if topic in self.stats.skipped_topics:
+            return None
+        try:
+            ensure_type(self.registry, recorded.type_name, recorded.definition)
+            msg = from_cdr(self.registry, recorded.type_name, recorded.cdr)
+        except SchemaError as exc:
+            self.stats.skipped_topics[topic] = str(exc)
+            log.warning("not playing %s (%s): %s", topic, recorded.type_name, exc)
+            return None
+        due_s = max(0.0, (recorded.log_time_ns - first_ns) / NS_PER_S / self.rate)
+        return Scheduled(topic, recorded.type_name, msg, due_s, len(recorded.cdr), first_ns)
+
+    async def _sender(self, item: Scheduled, bulk: RosbridgeClient,
+                      realtime: RosbridgeClient) -> asyncio.Queue[Scheduled | None]:
+        """The queue of ``item``'s topic; the first time, advertise it and start its sender."""
+        entry = self._senders.get(item.topic)
+        if entry is None:
+            client = bulk if item.size >= BULK_BYTES else realtime
+            await client.advertise(item.topic, item.type_name, latch=item.topic in LATCHED)
+            log.info("playing %s (%s)", item.topic, item.type_name)
+            queue: asyncio.Queue[Scheduled | None] = asyncio.Queue()
+            task = asyncio.create_task(self._send(client, item.topic, queue),
+                                       name=f"play {item.topic}")
+            entry = self._senders[item.topic] = (queue, task)
+        return entry[0]
+
+    async def _send(self, client: RosbridgeClient, topic: str,
+                    queue: asyncio.Queue[Scheduled | None]) -> None:
+        """Publish what arrives on ``queue`` in order (None ends)."""
+        while (item := await queue.get()) is not None:
+            if self.stamps == "now":
+                restamp(item.msg, functools.partial(_constant, time.time_ns()))
+            await client.publish(topic, item.msg)
+            self.stats.messages[topic] = self.stats.messages.get(topic, 0) + 1
+
+    async def _drain_senders(self) -> None:
+        """Let every topic's sender publish what is queued, then end it."""
+        for queue, _ in self._senders.values():
+            queue.put_nowait(None)
+        await asyncio.gather(*(task for _, task in self._senders.values()),
+                             return_exceptions=True)
+
+
+
+def _constant(value: int, _ignored: int) -> int:
+    return value
+
+
+def _shifted(start_wall_ns: int, first_log_ns: int, rate: float, stamp_ns: int) -> int:
+    """``stamps="shift"``: the pass's first log_time lands on its wall-clock start."""
+    return start_wall_ns + round((stamp_ns - first_log_ns) / rate)

@@ -1,0 +1,186 @@
+"""The DDS mirror's pure parts: wire names, QoS, the request header, the Cyclone XML, the
+domain read as a ROS graph, the graph's remote half and the write queue."""
+
+from __future__ import annotations
+
+import xml.etree.ElementTree as ET
+
+import pytest
+
+from bridge.dds import naming, request_header
+from bridge.dds.cyclone_xml import CycloneSettings, cyclone_xml
+from bridge.dds.discovery import DomainView, Endpoint, NodeEntities, Snapshot, participant_node
+from bridge.dds.graph_sync import GraphSync
+from bridge.dds.outbox import Outbox
+from bridge.dds.qos import (
+    DEFAULT,
+    LATCHED,
+    READER_DEPTH,
+    QosError,
+    QosProfile,
+    advertised_profile,
+    reader_profile,
+    strongest,
+    writer_profile,
+)
+from bridge.dds.request_header import RequestId
+from bridge.graph import Graph
+from schemas.codec_cdr import from_cdr, to_cdr
+
+P1, P2 = bytes(range(12)) + b"\x00\x00\x01\xc1", bytes(range(1, 13)) + b"\x00\x00\x01\xc1"
+
+
+def endpoint(n: int, participant: bytes, topic: str, dds_type: str, writer: bool,
+             qos: QosProfile = DEFAULT) -> Endpoint:
+    return Endpoint(participant[:12] + n.to_bytes(4, "big"), participant, topic, dds_type,
+                    writer, qos)
+
+
+def test_ros_names_map_to_rmw_cyclonedds_wire_names():
+    assert naming.topic_to_dds("/chatter") == "rt/chatter"
+    assert naming.topic_to_dds("/a/b") == "rt/a/b"
+    assert naming.request_topic("/add") == "rq/addRequest"
+    assert naming.reply_topic("/ns/add") == "rr/ns/addReply"
+    assert naming.parse_dds_topic("rt/a/b") == naming.WireName("topic", "/a/b")
+    assert naming.parse_dds_topic("rq/addRequest") == naming.WireName("request", "/add")
+    assert naming.parse_dds_topic("rr/ns/addReply") == naming.WireName("reply", "/ns/add")
+    for other in ("ros_discovery_info", "DCPSPublication", "rq/add", "rt/", "xx/a", "rt//a"):
+        assert naming.parse_dds_topic(other) is None
+
+
+def test_ros_types_map_to_dds_type_names():
+    assert naming.type_to_dds("sensor_msgs/msg/Imu") == "sensor_msgs::msg::dds_::Imu_"
+    assert (naming.type_to_dds("std_srvs/srv/SetBool_Request")
+            == "std_srvs::srv::dds_::SetBool_Request_")
+    assert naming.type_from_dds("geometry_msgs::msg::dds_::Wrench_") == "geometry_msgs/msg/Wrench"
+    assert naming.type_from_dds("std_srvs::srv::dds_::SetBool_Response_") == (
+        "std_srvs/srv/SetBool_Response")
+    for other in ("Imu", "sensor_msgs::msg::Imu_", "a::b::dds_::C_", "a::msg::dds_::C"):
+        assert naming.type_from_dds(other) is None
+    assert naming.service_type_of_part("std_srvs/srv/SetBool_Request") == (
+        "std_srvs/srv/SetBool", "request")
+    assert naming.service_type_of_part("std_msgs/msg/String") is None
+    assert naming.node_name("/", "talker") == "/talker"
+    assert naming.node_name("/ns/", "t") == "/ns/t"
+    assert naming.node_name("", "t") == "/t"
+
+
+def test_writer_qos_follows_ros2_defaults_latch_and_the_advertise_qos_object():
+    assert writer_profile(False, None) == QosProfile(True, False, 10)
+    assert writer_profile(True, None) == LATCHED == QosProfile(True, True, 1)
+    assert writer_profile(False, {"reliability": "best_effort", "depth": 5}) == QosProfile(
+        False, False, 5)
+    assert writer_profile(False, {"durability": "transient_local", "history": "keep_all"}) == (
+        QosProfile(True, True, 0))
+    for bad in ({"reliability": "sometimes"}, {"depth": 0}, {"depth": True},
+                {"history": "keep_some"}):
+        with pytest.raises(QosError):
+            writer_profile(False, bad)
+    assert advertised_profile(True, {"reliability": "sometimes"}) == (
+        LATCHED, "qos.reliability must be one of reliable, best_effort, best_available, "
+                 "system_default; got 'sometimes'")
+    assert advertised_profile(False, {"depth": 3}) == (QosProfile(depth=3), "")
+
+
+def test_reader_qos_adapts_to_the_writers_it_must_match():
+    best_effort, latched = QosProfile(False, False, 5), QosProfile(True, True, 1)
+    assert reader_profile([]) == QosProfile(True, False, READER_DEPTH)
+    assert reader_profile([DEFAULT, best_effort]).reliable is False
+    assert reader_profile([latched]).transient_local is True
+    assert reader_profile([latched, DEFAULT]).transient_local is False
+    assert strongest([best_effort, latched]) == QosProfile(True, True, 5)
+    assert strongest([DEFAULT, QosProfile(depth=0)]).depth == 0
+
+
+def test_request_header_sits_between_encapsulation_and_fields(registry):
+    body = to_cdr(registry, "std_srvs/srv/SetBool_Request", {"data": True})
+    wrapped = request_header.wrap(body, RequestId(0x0102030405060708, 42))
+    assert wrapped[:4] == body[:4] == b"\x00\x01\x00\x00"
+    assert wrapped[4:12] == (0x0102030405060708).to_bytes(8, "little")
+    assert wrapped[12:20] == (42).to_bytes(8, "little", signed=True)
+    request, cdr = request_header.unwrap(wrapped)
+    assert request == RequestId(0x0102030405060708, 42) and cdr == body
+    assert from_cdr(registry, "std_srvs/srv/SetBool_Request", cdr) == {"data": True}
+    big_endian = b"\x00\x00\x00\x00" + (7).to_bytes(8, "big") + (9).to_bytes(8, "big")
+    assert request_header.unwrap(big_endian)[0] == RequestId(7, 9)
+    with pytest.raises(ValueError):
+        request_header.unwrap(b"\x00\x01\x00\x00abc")
+
+
+def test_cyclone_xml_keeps_dds_on_the_named_interface_without_multicast():
+    loopback = ET.fromstring(cyclone_xml(CycloneSettings()))
+    assert loopback.find("Domain/General/Interfaces/NetworkInterface").get("name") == "lo"
+    assert loopback.find("Domain/General/AllowMulticast").text == "false"
+    assert [p.get("address") for p in loopback.iter("Peer")] == ["127.0.0.1"]
+    assert loopback.find("Domain/Discovery/ParticipantIndex").text == "auto"
+    veth = ET.fromstring(cyclone_xml(CycloneSettings("veth-a", ("10.0.0.2",), "spdp"), False))
+    assert veth.find("Domain/General/Interfaces/NetworkInterface").get("name") == "veth-a"
+    assert veth.find("Domain/General/AllowMulticast").text == "spdp"
+    assert [p.get("address") for p in veth.iter("Peer")] == ["10.0.0.2"]
+    assert veth.find("Domain/Internal") is None
+    for bad in ({"interface": "lo\"/><x"}, {"peers": ("1.2.3.4\"",)}, {"multicast": "maybe"}):
+        with pytest.raises(ValueError):
+            CycloneSettings(**bad)
+
+
+def test_domain_view_names_endpoints_after_ros_discovery_info_nodes():
+    view = DomainView()
+    talker_writer = endpoint(1, P1, "rt/chatter", "std_msgs::msg::dds_::String_", True)
+    listener = endpoint(2, P2, "rt/chatter", "std_msgs::msg::dds_::String_", False)
+    odd_type = endpoint(3, P2, "rt/chatter", "other::msg::dds_::String_", True)
+    request = endpoint(4, P1, "rq/setRequest", "std_srvs::srv::dds_::SetBool_Request_", False)
+    reply = endpoint(5, P1, "rr/setReply", "std_srvs::srv::dds_::SetBool_Response_", True)
+    plain = endpoint(6, P2, "plain_dds_topic", "Whatever", True)
+    view.update_snapshot(Snapshot(frozenset({P1, P2}),
+                                  (talker_writer, listener, odd_type, request, reply, plain)))
+    view.update_nodes(P1, (NodeEntities("/talker", frozenset({request.guid}),
+                                        frozenset({talker_writer.guid, reply.guid})),))
+    topics = view.topics()
+    assert list(topics) == ["/chatter"]
+    assert topics["/chatter"].type_name == "std_msgs/msg/String"
+    assert topics["/chatter"].publishers == {"/talker": [DEFAULT]}
+    assert topics["/chatter"].subscribers == {participant_node(P2)}
+    assert view.services()["/set"].node == "/talker"
+    assert view.services()["/set"].type_name == "std_srvs/srv/SetBool"
+    assert view.writer_node(talker_writer.guid) == "/talker"
+    assert view.writer_node(b"unknown") is None
+    assert view.announced_nodes() == {"/talker"}
+    view.update_snapshot(Snapshot(frozenset({P2}), (listener,)))
+    assert view.node_info == {} and view.services() == {}
+
+
+def test_graph_sync_adds_and_removes_remote_endpoints_but_never_local_ones():
+    graph, sync, view = Graph(), GraphSync(), DomainView()
+    graph.add_publisher("/chatter", "/rosbridge_client_1", None, latch=False)
+    graph.declare_type("/chatter", "std_msgs/msg/String")
+    view.update_snapshot(Snapshot(frozenset({P1}), (
+        endpoint(1, P1, "rt/chatter", "std_msgs::msg::dds_::String_", True),
+        endpoint(2, P1, "rt/odom", "nav_msgs::msg::dds_::Odometry_", False),
+        endpoint(3, P1, "rt/clash", "std_msgs::msg::dds_::Bool_", True))))
+    view.update_nodes(P1, (NodeEntities("/remote"),))
+    graph.declare_type("/clash", "std_msgs/msg/String")
+    graph.add_subscriber("/clash", "/rosbridge_client_1")
+    sync.apply(graph, view.topics(), {"/rosbridge_client_1"})
+    assert set(graph.topics["/chatter"].publishers) == {"/rosbridge_client_1", "/remote"}
+    assert graph.topics["/odom"].subscribers == {"/remote"}
+    assert graph.topics["/odom"].type_name == "nav_msgs/msg/Odometry"
+    assert "/remote" not in graph.topics["/clash"].publishers  # type conflict: not listed
+    view.update_snapshot(Snapshot())
+    sync.apply(graph, view.topics(), {"/rosbridge_client_1"})
+    assert set(graph.topics["/chatter"].publishers) == {"/rosbridge_client_1"}
+    assert "/odom" not in graph.topics
+
+
+def test_outbox_keeps_order_and_drops_the_oldest_of_a_full_stream():
+    outbox, done = Outbox(max_items=2, max_bytes=100), []
+    for n in range(4):
+        outbox.put("imu", lambda n=n: done.append(("imu", n)), size=1)
+    for n in range(3):
+        outbox.put("scan", lambda n=n: done.append(("scan", n)), size=60)
+    outbox.put("huge", lambda: done.append(("huge", 0)), size=500)  # alone: kept
+    while (job := outbox.get(timeout_s=0)) is not None:
+        job()
+    assert done == [("imu", 2), ("imu", 3), ("scan", 2), ("huge", 0)]
+    assert outbox.dropped == {"imu": 2, "scan": 2}
+    outbox.close()
+    assert outbox.get(timeout_s=0) is None
