@@ -14,7 +14,7 @@ from pathlib import Path
 from pydantic import SecretStr, ValidationError
 
 from bridge.access import scheme, tls_context
-from bridge.config import AUTH_SECRET_ENV, MIB, BridgeConfig
+from bridge.config import AUTH_SECRET_ENV, MIB, MIN_SEND_BUFFER, BridgeConfig
 from bridge.dds.options import add_dds_options, dds_config_fields, print_config
 from bridge.errors import DdsStartError
 from bridge.server import run_bridge
@@ -35,6 +35,13 @@ def positive_float(text: str) -> float:
     value = float(text)
     if not value > 0:
         raise argparse.ArgumentTypeError(f"must be a positive number, got {text}")
+    return value
+
+
+def buffer_bytes(text: str) -> int:
+    value = int(text)
+    if value < MIN_SEND_BUFFER:
+        raise argparse.ArgumentTypeError(f"must be at least {MIN_SEND_BUFFER} bytes, got {text}")
     return value
 
 
@@ -67,9 +74,11 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--actions-glob", action="append", default=[], metavar="PATTERN",
                         help="allow only actions matching this fnmatch pattern (repeatable; "
                              "default: the --services-glob patterns)")
-    parser.add_argument("--send-queue", type=positive_int, default=defaults.send_queue,
-                        help="messages of one topic queued per client before its oldest is dropped "
-                             "(default %(default)s)")
+    parser.add_argument("--send-buffer", type=buffer_bytes, default=defaults.send_buffer_bytes,
+                        metavar="BYTES",
+                        help="bytes a client may leave untaken before each of its topics loses "
+                             "its oldest waiting message "
+                             f"(default {defaults.send_buffer_bytes // MIB} MiB)")
     parser.add_argument("--offload-threshold", type=positive_int,
                         default=defaults.offload_threshold_bytes, metavar="BYTES",
                         help="payloads at least this large are decoded and encoded in a worker "
@@ -110,7 +119,7 @@ def config_from_args(args: argparse.Namespace) -> BridgeConfig:
         fragment_timeout_s=args.fragment_timeout, call_timeout_s=args.call_timeout,
         topics_glob=tuple(args.topics_glob), services_glob=tuple(args.services_glob),
         actions_glob=tuple(args.actions_glob),
-        send_queue=args.send_queue, interface_dirs=tuple(args.interfaces),
+        send_buffer_bytes=args.send_buffer, interface_dirs=tuple(args.interfaces),
         offload_threshold_bytes=args.offload_threshold,
         web_root=args.web_root,
         auth_secret=None if args.auth_secret_file is None else SecretStr(

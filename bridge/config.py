@@ -13,6 +13,7 @@ from typing import Annotated, Literal
 from pydantic import BaseModel, ConfigDict, Field, SecretStr, model_validator
 
 MIB = 1024 * 1024
+MIN_SEND_BUFFER = 64 * 1024  # below one socket buffer's worth, healthy readers would drop
 #: Environment variable naming a rosauth secret file: the bridge's default --auth-secret-file,
 #: and what riverbridge's clients authenticate with (clients.connection).
 AUTH_SECRET_ENV = "RIVERBRIDGE_AUTH_SECRET_FILE"
@@ -39,9 +40,11 @@ class BridgeConfig(BaseModel):
     # fnmatch patterns gating action names (advertise_action, send_action_goal); empty = the
     # services' patterns, since ROS 2 actions are services underneath (rosbridge gates none).
     actions_glob: tuple[str, ...] = ()
-    # Messages of one topic waiting for one client; past it that topic's oldest is dropped
-    # (rosbridge 2026 write_queue_size idea, #1290): a few frames of the fastest sensor.
-    send_queue: int = Field(default=16, gt=0)
+    # Bytes one client may leave untaken (in its socket's buffer and its queue) before each topic
+    # it subscribes to loses its oldest waiting message (docs/bridge.md, "Delivery"). 16 MiB holds
+    # two JSON scans (7.4 MB each, Table 4.3) or ~100,000 small messages: only a client that
+    # stops reading or falls seconds behind ever loses anything.
+    send_buffer_bytes: int = Field(default=16 * MIB, ge=MIN_SEND_BUFFER)
     # Frames from this many bytes on are decoded, validated and encoded in the worker pool, off
     # the loop: a 4 MB JSON+base64 encode is ~10-30 ms (performance-measurements §2(c)), and
     # validating a 40 kB array of 400 nested messages ~6 ms on a busy core.

@@ -34,7 +34,7 @@ from bridge.session import ClientSession
 from bridge.sinks import MessageSink
 from schemas.errors import SchemaError
 from schemas.message import normalize
-from schemas.ops import MAX_NAME_CHARS, OpError, parse_op, reply_id
+from schemas.ops import MAX_NAME_CHARS, OpError, parse_op, parse_publish, reply_id
 from schemas.registry import TypeRegistry
 from schemas.safety import echo, safe_text
 from schemas.specs import MessageSpec
@@ -109,22 +109,35 @@ class BridgeCore:
         return self.receive_decoded(client_id, decoded, now_ns)
 
     def prepare(self, data: bytes | str, now_ns: int) -> Any:
-        """Decode a frame and pre-convert a publish's message; meant for a worker thread.
+        """Decode a frame and pre-validate a publish's message (`prepare_decoded`)."""
+        return self.prepare_decoded(decode_frame(data), len(data), now_ns)
+
+    def needs_worker(self, message: Any, wire_bytes: int) -> bool:
+        """Is validating this decoded frame worth a worker thread? Yes for a publish whose
+        message is not mostly bytes and arrays: its validation runs in Python (nested messages)
+        or outside the GIL (base64), while bulk bytes and arrays cost microseconds."""
+        if not isinstance(message, dict) or message.get("op") != "publish":
+            return False
+        msg = message.get("msg")
+        return isinstance(msg, dict) and payload_size(msg) * 2 < wire_bytes
+
+    def prepare_decoded(self, message: Any, wire_bytes: int, now_ns: int) -> Any:
+        """Pre-validate a decoded publish's message; meant for a worker thread.
 
         Everything a large publish costs in proportion to its size happens here, off the event
-        loop: the JSON or CBOR parse, base64 decode of byte arrays, validation of every nested
-        message, the size figures. It only reads the graph (the topic's type); the handler
-        takes the `PreparedMessage` as it is when the type is unchanged. Raises SchemaError for
-        undecodable frames; hand the result to `receive_decoded`.
+        loop: base64 decode of byte arrays, validation of every nested message, the size
+        figures. It only reads the graph (the topic's type); the handler takes the
+        `PreparedMessage` as it is when the type is unchanged. Hand the result to
+        `receive_decoded`; a message that does not validate is left for the handler to refuse.
         """
-        message = decode_frame(data)
         if isinstance(message, dict) and message.get("op") == "publish":
             spec = self._presumed_spec(message)
             if spec is not None and isinstance(message.get("msg"), dict):
                 with contextlib.suppress(SchemaError):
                     msg = normalize(spec, message["msg"], now_ns=now_ns)
                     message = {**message, "msg": PreparedMessage(
-                        msg, spec, max(len(data), payload_size(msg)), self._cdr_bytes(spec, msg))}
+                        msg, spec, max(wire_bytes, payload_size(msg)),
+                        self._cdr_bytes(spec, msg))}
         return message
 
     def _cdr_bytes(self, spec: MessageSpec, msg: dict[str, Any]) -> int | None:
@@ -208,7 +221,7 @@ class BridgeCore:
             return
         handler = OP_HANDLERS[op_name]
         try:
-            op = parse_op(message)
+            op = parse_publish(message) if op_name == "publish" else parse_op(message)
         except OpError as exc:
             answer_failed_request(ctx, session, message, f"malformed op: {exc}")
             return

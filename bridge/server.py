@@ -1,9 +1,12 @@
-"""The asyncio edge: sockets, clock, timers, per-client writers and shutdown.
+"""The asyncio edge: sockets, clock, timers, per-client links and shutdown.
 
-Everything protocol-related happens in `BridgeCore`; this module only pumps frames into it,
-carries out the effects it returns, and keeps slow work off the event loop: frames and
-encodes above `offload_threshold_bytes` run in a small thread pool, and each client has a
-writer task draining a bounded `SendQueue`, so a slow reader backs up only itself.
+Everything protocol-related happens in `BridgeCore`; this module only pumps frames into it and
+carries out the effects it returns. Each connection has an `Intake` (inbound: big frames decoded
+on a worker, order kept per topic) and a `ClientLink` (outbound: write-through while the socket
+has room, a byte-bounded backlog when it has not). Readers take fair turns: after `TURN_S` of
+handling frames a reader yields, so the frames it produced go out and other clients get read;
+a reader also waits while the clients its messages go to are backed up (TCP backpressure on the
+publisher), and while its own client leaves too many answers unread.
 """
 
 from __future__ import annotations
@@ -26,19 +29,15 @@ from bridge.config import BridgeConfig
 from bridge.core import BridgeCore
 from bridge.effects import Close, Effect, Schedule, Send
 from bridge.http import HttpRoutes
-from bridge.outgoing import Delivery, WireFrame, render
-from bridge.reply_budget import POLICY_VIOLATION, ReplyBudget
-from bridge.sendqueue import SendQueue
+from bridge.intake import Intake
+from bridge.link import WRITE_HIGH_WATER, ClientLink
+from bridge.reply_budget import POLICY_VIOLATION
 from bridge.stats import BridgeTelemetry
 from bridge.webapp import default_web_root, mount_webapp
-from schemas.errors import SchemaError
 from schemas.registry import TypeRegistry
 
 logger = logging.getLogger("bridge.server")
 
-# Bytes the transport may buffer per client before `send` waits: a few small frames, or one
-# slice of a scan, without letting a stalled reader pin many megabytes.
-WRITE_HIGH_WATER = 1024 * 1024
 ENCODE_WORKERS = 2  # the machine has 2 cores; more threads only contend for the GIL
 # A client that stopped reading cannot finish a closing handshake; do not wait long for it.
 CLOSE_TIMEOUT_S = 3.0
@@ -46,41 +45,13 @@ CLOSE_TIMEOUT_S = 3.0
 # the bridge stops reading its requests: a client that calls without reading then waits on
 # TCP instead of growing the bridge's memory.
 ANSWER_BACKLOG = 256
+# Longest stretch a reader handles frames before it lets the loop write and read elsewhere.
+TURN_S = 0.001
+# Frames of one connection taken but not yet handled (decoding on a worker, or waiting behind
+# one) before the bridge stops reading that connection.
+INTAKE_FRAMES = 256
+INTAKE_BYTES = 32 * 1024 * 1024
 TRY_AGAIN_LATER = 1013  # RFC 6455: a handshake that raced past --max-clients
-
-
-class ClientLink:
-    """The edge's half of one connection: websocket, send queue and writer task."""
-
-    def __init__(self, client_id: int, ws: ServerConnection, limit: int,
-                 reply_budget_bytes: int) -> None:
-        self.client_id = client_id
-        self.ws = ws
-        self.queue = SendQueue(limit)
-        self.replies = ReplyBudget(reply_budget_bytes)  # unread undroppable bytes
-        self.ready = asyncio.Event()
-        self.room = asyncio.Event()  # set while answers_waiting <= ANSWER_BACKLOG
-        self.room.set()
-        self.writer: asyncio.Task[None] | None = None
-        self.frames_sent = 0
-        self.over_budget = False
-
-    def enqueue(self, send: Send) -> bool:
-        """Queue `send`; False when an answer takes the client past its reply budget."""
-        within = send.drop_key is None and self.replies.charge(reply_bytes(send))
-        if self.queue.push(send) is not None:
-            logger.debug("client %d: dropped oldest message of %s", self.client_id,
-                         send.drop_key)
-        self.ready.set()
-        return within or send.drop_key is not None
-
-
-def reply_bytes(send: Send) -> int:
-    """Wire bytes of an undroppable item (its frame is encoded once and kept)."""
-    try:
-        return len(send.item.frame().data)
-    except SchemaError:
-        return 0  # cannot be sent at all; the writer logs it
 
 
 class BridgeServer:
@@ -155,106 +126,73 @@ class BridgeServer:
             return
         peer = "{}:{}".format(*ws.remote_address[:2]) if ws.remote_address else ""
         client_id = self.core.connect(peer)
-        link = self.links[client_id] = ClientLink(client_id, ws, self.config.send_queue,
-                                                  self.config.reply_budget_bytes)
-        link.writer = asyncio.create_task(self._write(link), name=f"bridge-writer-{client_id}")
+        link = self.links[client_id] = ClientLink(
+            client_id, ws, limit_bytes=self.config.send_buffer_bytes, pool=self._pool,
+            offload_bytes=self.config.offload_threshold_bytes,
+            reply_budget_bytes=self.config.reply_budget_bytes,
+            delivered=self.telemetry.tracer.delivered,
+            over_budget=lambda reason: self._close_over_budget(client_id, reason))
+        paced: set[ClientLink] = set()  # links this client's messages went to that are full
+
+        def apply(effects: list[Effect]) -> None:
+            self.apply(effects, paced)
+
+        intake = Intake(client_id, self.core, self._pool, self.config.offload_threshold_bytes,
+                        apply, self.telemetry.tracer.frame_arrived)
         self.apply(self.telemetry.clients_changed())
         try:
+            busy_s = 0.0  # time spent handling this client's frames since it last yielded
             async for data in ws:
-                self.apply(await self._receive(client_id, data))
-                while link.queue.answers_waiting > ANSWER_BACKLOG and not link.writer.done():
-                    link.room.clear()
-                    await link.room.wait()
+                started = time.perf_counter()
+                intake.take(data, time.time_ns())
+                busy_s += time.perf_counter() - started
+                if (paced or busy_s > TURN_S or intake.in_flight > INTAKE_FRAMES
+                        or intake.pending_bytes > INTAKE_BYTES
+                        or link.queue.answers_waiting > ANSWER_BACKLOG):
+                    await self._between_turns(link, intake, paced)
+                    busy_s = 0.0
         except ConnectionClosed as exc:
             logger.info("client %d closed: %s", client_id, exc)
         finally:
+            intake.closed = True
             del self.links[client_id]
-            link.writer.cancel()
+            link.close()
             self.apply(self.core.disconnect(client_id, time.time_ns()))
             self.apply(self.telemetry.clients_changed())
-            with contextlib.suppress(asyncio.CancelledError):
-                await link.writer
 
-    async def _receive(self, client_id: int, data: bytes | str) -> list[Effect]:
-        arrived_ns = time.time_ns()
-        if len(data) < self.config.offload_threshold_bytes:
-            self.telemetry.tracer.frame_arrived(arrived_ns, len(data))
-            return self.core.receive(client_id, data, arrived_ns)
-        loop = asyncio.get_running_loop()
-        try:
-            decoded = await loop.run_in_executor(self._pool, self.core.prepare, data,
-                                                 time.time_ns())
-        except SchemaError as exc:
-            return self.core.receive_invalid(client_id, str(exc), time.time_ns())
-        self.telemetry.tracer.frame_arrived(arrived_ns, len(data))
-        return self.core.receive_decoded(client_id, decoded, time.time_ns())
+    def _close_over_budget(self, client_id: int, reason: str) -> None:
+        """A client left more answers unread than its reply budget (`bridge.reply_budget`)."""
+        logger.warning("client %d: closing, %s", client_id, reason)
+        self.apply([Close(client_id, POLICY_VIOLATION, reason)])
 
-    async def _write(self, link: ClientLink) -> None:
-        try:
-            await self._write_until_closed(link)
-        finally:
-            link.room.set()  # the reader must not wait for a writer that has stopped
-
-    async def _write_until_closed(self, link: ClientLink) -> None:
-        sequence = 0  # numbers fragment ids of messages that have no id of their own
-        while True:
-            send = link.queue.pop()
-            if link.queue.answers_waiting <= ANSWER_BACKLOG:
-                link.room.set()
-            if send is None:
-                link.ready.clear()
-                await link.ready.wait()
-                continue
-            sequence += 1
-            frames = await self._render(send, f"fragment:{sequence}")
-            handed_ns = time.time_ns()
-            try:
-                for frame in frames:
-                    handed_ns = time.time_ns()  # websockets writes it to the transport now
-                    await link.ws.send(frame.data, text=frame.text)
-                    link.frames_sent += 1
-            except ConnectionClosed:
-                return
-            if send.drop_key is None:
-                link.replies.credit(reply_bytes(send))
-            if isinstance(send.item, Delivery):
-                self.telemetry.tracer.delivered(link.client_id, send.item,
-                                                sum(len(f.data) for f in frames), handed_ns)
-
-    async def _render(self, send: Send, fallback_id: str) -> list[WireFrame]:
-        try:
-            if send.item.size_hint < self.config.offload_threshold_bytes:
-                return render(send.item, send.fragment_size, fallback_id)
-            loop = asyncio.get_running_loop()
-            return await loop.run_in_executor(self._pool, render, send.item,
-                                              send.fragment_size, fallback_id)
-        except Exception:  # one unencodable message must not end the client's writer
-            logger.exception("client %d: cannot encode a message for %s", send.client_id,
-                             send.drop_key or "a reply")
-            return []
+    @staticmethod
+    async def _between_turns(link: ClientLink, intake: Intake, paced: set[ClientLink]) -> None:
+        """Let the loop write and read elsewhere; read on once this client may go on."""
+        await asyncio.sleep(0)
+        while paced:
+            await paced.pop().drained()
+        await link.answers_taken(ANSWER_BACKLOG)
+        await intake.settled(INTAKE_FRAMES // 2, INTAKE_BYTES // 2)
 
     # -- effects -----------------------------------------------------------------------------
 
-    def apply(self, effects: list[Effect]) -> None:
+    def apply(self, effects: list[Effect], paced: set[ClientLink] | None = None) -> None:
+        """Carry out effects; links that ask publishers to wait are added to `paced`."""
         for effect in effects:
-            if isinstance(effect, Send):
+            if type(effect) is Send:
                 link = self.links.get(effect.client_id)
-                if link is not None:
-                    if not link.enqueue(effect) and not link.over_budget:
-                        link.over_budget = True
-                        logger.warning("client %d: closing, %s", link.client_id,
-                                       link.replies.reason())
-                        self.apply([Close(link.client_id, POLICY_VIOLATION,
-                                          link.replies.reason())])
-                elif effect.client_id in self.internal_clients:
+                if link is not None and link.offer(effect) and paced is not None:
+                    paced.add(link)
+                elif link is None and effect.client_id in self.internal_clients:
                     self.internal_clients[effect.client_id](effect)
             elif isinstance(effect, Schedule):
                 self._schedule(effect.key, effect.at_ns)
             elif isinstance(effect, Close):
                 link = self.links.get(effect.client_id)
-                if link is not None:
+                if link is not None and not link.closing:
+                    link.closing = True  # nothing more is sent to it or waited for
                     task = asyncio.get_running_loop().create_task(
-                        link.ws.close(effect.code, effect.reason))
+                        close_link(link, effect.code, effect.reason))
                     self._closing.add(task)
                     task.add_done_callback(self._closing.discard)
 
@@ -270,9 +208,21 @@ class BridgeServer:
         self.apply(self.core.on_deadline(key, time.time_ns()))
 
     def stats(self) -> dict[int, dict[str, object]]:
-        """Per connected client: frames sent, messages dropped per topic, items waiting."""
+        """Per connected client: frames sent, messages dropped per topic, items waiting and
+        bytes not yet taken by the client."""
         return {cid: {"frames_sent": link.frames_sent, "dropped": dict(link.queue.dropped),
-                      "waiting": len(link.queue)} for cid, link in self.links.items()}
+                      "waiting": len(link.queue), "backlog_bytes": link.backlog_bytes()}
+                for cid, link in self.links.items()}
+
+
+async def close_link(link: ClientLink, code: int, reason: str) -> None:
+    """Close a client's websocket; one that does not read cannot take the close frame behind
+    what fills its socket, so after CLOSE_TIMEOUT_S its connection is cut."""
+    try:
+        async with asyncio.timeout(CLOSE_TIMEOUT_S):
+            await link.ws.close(code, reason)
+    except TimeoutError:
+        link.ws.transport.abort()
 
 
 @dataclass(frozen=True)

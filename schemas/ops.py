@@ -12,7 +12,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from types import MappingProxyType
-from typing import Annotated, Any, Literal
+from typing import Annotated, Any, Literal, NamedTuple
 
 from pydantic import (
     AfterValidator,
@@ -363,6 +363,44 @@ def parse_op(obj: Any) -> OpModel:
     except ValidationError as exc:
         errors = exc.errors(include_url=False)
         raise OpError(_describe_error(op, errors[0], len(errors) - 1), op=op, id=op_id) from None
+
+
+class PublishFields(NamedTuple):
+    """A well-formed ``publish`` as `parse_publish` reads it: the fields of :class:`Publish`."""
+
+    topic: str
+    msg: dict
+    id: Any = None
+    latch: bool = False
+    queue_size: int = 100
+    type: str | None = None
+
+
+def parse_publish(obj: Mapping[str, Any]) -> Publish | PublishFields:
+    """`parse_op` for the most frequent op, without pydantic when nothing needs it.
+
+    A ``publish`` whose fields already have the types and sizes :class:`Publish` asks for (the
+    normal case, ~0.4 µs instead of ~2 µs) becomes a `PublishFields`; anything else goes
+    through `parse_op`, which refuses it with the same message as always. The message itself
+    is not looked at here: it is validated against its topic's type afterwards, either way.
+    """
+    topic, msg, op_id = obj.get("topic"), obj.get("msg", _ABSENT), obj.get("id")
+    latch, queue_size = obj.get("latch", False), obj.get("queue_size", 100)
+    type_name = obj.get("type")
+    if (type(topic) is str and len(topic) <= MAX_NAME_CHARS
+            and (latch is False or latch is True) and type(queue_size) is int
+            and (type_name is None or (type(type_name) is str
+                                       and len(type_name) <= MAX_NAME_CHARS))
+            and (op_id is None or isinstance(op_id, bool | int | float)
+                 or (type(op_id) is str and len(op_id) <= MAX_ID_CHARS))):
+        if type(msg) is dict:
+            return PublishFields(topic, msg, op_id, latch, queue_size, type_name)
+        if msg is None or msg is _ABSENT:
+            return PublishFields(topic, {}, op_id, latch, queue_size, type_name)
+    return parse_op(obj)  # type: ignore[return-value]
+
+
+_ABSENT = object()
 
 
 def to_wire(model: OpBase) -> dict:

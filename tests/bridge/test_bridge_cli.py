@@ -48,6 +48,7 @@ async def test_module_starts_logs_its_port_and_exits_cleanly_on_sigint():
     (["--max-message-size", "0"], "--max-message-size"),
     (["--call-timeout", "soon"], "--call-timeout"),
     (["--interfaces", "/no/such/dir"], "--interfaces"),
+    (["--send-buffer", "1000"], "--send-buffer"),
 ])
 def test_bad_arguments_name_the_option(argv, option, capsys):
     with pytest.raises(SystemExit) as exited:
@@ -58,9 +59,9 @@ def test_bad_arguments_name_the_option(argv, option, capsys):
 
 def test_arguments_become_the_config():
     args = build_parser().parse_args(["--port", "0", "--topics-glob", "/cam/*",
-                                      "--topics-glob", "/imu", "--send-queue", "3",
+                                      "--topics-glob", "/imu", "--send-buffer", "70000",
                                       "--call-timeout", "1.5"])
     config = config_from_args(args)
     assert config.port == 0 and config.topics_glob == ("/cam/*", "/imu")
-    assert config.send_queue == 3 and config.call_timeout_s == 1.5
+    assert config.send_buffer_bytes == 70_000 and config.call_timeout_s == 1.5
     assert config.max_message_size == 64 * 1024 * 1024

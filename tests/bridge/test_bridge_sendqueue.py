@@ -1,4 +1,4 @@
-"""The per-client send queue's drop policy."""
+"""The per-client backlog: bounded in bytes, drop-oldest per topic, answers never dropped."""
 
 from __future__ import annotations
 
@@ -13,45 +13,65 @@ def item(label: str, topic: str | None) -> Send:
     return Send(1, ControlMessage({"op": "x", "id": label}), topic)
 
 
-def labels(queue: SendQueue) -> list[str]:
+def labels(queue: SendQueue, busy: tuple[str | None, ...] = ()) -> list[str]:
     out = []
-    while (send := queue.pop()) is not None:
-        out.append(send.item.payload["id"])
+    while (waiting := queue.pop(busy)) is not None:
+        out.append(waiting.send.item.payload["id"])
     return out
 
 
-def test_drops_the_oldest_message_of_the_full_topic_only():
-    queue = SendQueue(2)
+def test_nothing_is_dropped_within_the_bound():
+    queue = SendQueue(1000)
+    for n in range(10):
+        assert queue.push(item(f"a{n}", "/a"), 100) == []
+    assert len(queue) == 10 and queue.bytes == 1000 and not queue.dropped
+
+
+def test_past_the_bound_the_pushed_topic_loses_its_oldest():
+    queue = SendQueue(300)
     for label, topic in [("a1", "/a"), ("b1", "/b"), ("a2", "/a")]:
-        assert queue.push(item(label, topic)) is None
-    dropped = queue.push(item("a3", "/a"))
-    assert dropped is not None and dropped.item.payload["id"] == "a1"
+        assert queue.push(item(label, topic), 100) == []
+    dropped = queue.push(item("a3", "/a"), 100)
+    assert [d.item.payload["id"] for d in dropped] == ["a1"]
     assert labels(queue) == ["b1", "a2", "a3"]
     assert queue.dropped == {"/a": 1}
 
 
-def test_many_busy_topics_do_not_push_each_other_out():
-    queue = SendQueue(1)
+def test_bytes_already_in_the_transport_count_against_the_bound():
+    queue = SendQueue(1000)
+    queue.push(item("a1", "/a"), 100)
+    dropped = queue.push(item("a2", "/a"), 100, outside_bytes=850)
+    assert [d.item.payload["id"] for d in dropped] == ["a1"]
+
+
+def test_a_topic_keeps_its_newest_message_and_never_evicts_another_topic():
+    queue = SendQueue(100)
     for n in range(50):
-        assert queue.push(item(f"t{n}", f"/t{n}")) is None
+        assert queue.push(item(f"t{n}", f"/t{n}"), 100) == []
     assert len(queue) == 50 and not queue.dropped
 
 
-def test_responses_are_never_dropped_and_never_count():
-    queue = SendQueue(1)
-    queue.push(item("r1", None))
-    queue.push(item("a1", "/a"))
-    queue.push(item("r2", None))
-    queue.push(item("a2", "/a"))
+def test_answers_are_never_dropped_and_never_push_out_a_message():
+    queue = SendQueue(200)
+    queue.push(item("r1", None), 100)
+    queue.push(item("a1", "/a"), 100)
+    queue.push(item("r2", None), 100)
+    assert queue.answers_waiting == 2
+    queue.push(item("a2", "/a"), 100)
     assert labels(queue) == ["r1", "r2", "a2"]
+    assert queue.answers_waiting == 0 and queue.bytes == 0
 
 
-def test_popping_frees_room_for_the_topic():
-    queue = SendQueue(1)
-    queue.push(item("a1", "/a"))
-    assert queue.pop() is not None
-    assert queue.push(item("a2", "/a")) is None
-    assert queue.dropped == {}
+def test_a_busy_stream_is_skipped_and_keeps_its_place():
+    queue = SendQueue(1000)
+    for label, topic in [("scan1", "/scan"), ("imu1", "/imu"), ("scan2", "/scan"),
+                         ("imu2", "/imu")]:
+        queue.push(item(label, topic), 10)
+    assert labels(queue, busy=("/scan",)) == ["imu1", "imu2"]
+    first = queue.pop()
+    assert first is not None and first.send.item.payload["id"] == "scan1"
+    queue.push_front(first)
+    assert labels(queue) == ["scan1", "scan2"]
 
 
 def test_limit_must_be_positive():

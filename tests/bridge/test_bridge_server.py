@@ -169,7 +169,7 @@ async def test_fragments_cannot_get_around_the_size_limit(registry):
 
 
 async def test_slow_reader_does_not_stall_a_fast_one(registry):
-    config = BridgeConfig(port=0, send_queue=4)
+    config = BridgeConfig(port=0, send_buffer_bytes=1024 * 1024)
     cloud, _ = point_cloud(32_768)
     async with (run_bridge(config, registry) as bridge,
                 websockets.connect(bridge.url, max_size=None) as pub,

@@ -289,3 +289,35 @@ def test_models_are_frozen():
     sub = parse_op({"op": "subscribe", "topic": "/t"})
     with pytest.raises(pydantic.ValidationError):
         sub.topic = "/other"
+
+
+@pytest.mark.parametrize("obj", [
+    {"op": "publish", "topic": "/t", "msg": {"data": 1}},
+    {"op": "publish", "topic": "t", "msg": None, "id": "p:1", "latch": True},
+    {"op": "publish", "topic": "/t", "queue_size": 5, "type": "std_msgs/String", "extra": 1},
+    {"op": "publish", "topic": "/t", "msg": {}, "id": 7.5},
+])
+def test_parse_publish_reads_what_parse_op_reads(obj):
+    fast, full = ops.parse_publish(obj), parse_op(obj)
+    assert isinstance(fast, ops.PublishFields)
+    for name in ops.PublishFields._fields:
+        assert getattr(fast, name) == getattr(full, name), name
+
+
+@pytest.mark.parametrize("obj", [
+    {"op": "publish", "topic": 5, "msg": {}},
+    {"op": "publish", "msg": {}},
+    {"op": "publish", "topic": "/t", "msg": [1, 2]},
+    {"op": "publish", "topic": "/t", "latch": 1},
+    {"op": "publish", "topic": "/t", "queue_size": True},
+    {"op": "publish", "topic": "/t", "type": 3},
+    {"op": "publish", "topic": "/t", "msg": {}, "id": {"any": "json"}},
+    {"op": "publish", "topic": "/t", "id": "i" * 301},
+    {"op": "publish", "topic": "/" + "t" * 600},
+])
+def test_parse_publish_refuses_like_parse_op(obj):
+    with pytest.raises(OpError) as fast:
+        ops.parse_publish(obj)
+    with pytest.raises(OpError) as full:
+        parse_op(obj)
+    assert str(fast.value) == str(full.value)

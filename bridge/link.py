@@ -1,0 +1,339 @@
+"""The edge's outgoing half of one connection: write-through, a byte-bounded backlog, pacing.
+
+A message for a client whose socket has room and nothing waiting is framed and handed to the
+transport at once, in the same loop turn that produced it: no queue, no task switch. Frames
+written in one turn leave in one `transport.write` when the turn ends (one system call for a
+burst instead of one per message). Only when the socket is backed up (the transport holds more
+than `room_bytes`, 1 MiB by default) do messages wait in the client's `SendQueue`, bounded in bytes;
+past the bound each topic loses its oldest waiting message, counted (`bridge.sendqueue`).
+
+Large messages whose encode is not just C code holding the GIL are encoded on a worker thread
+(JSON with base64, PNG, CDR); their topic waits for the encode (order per topic), other topics
+keep flowing past it.
+
+Publishers are paced by their subscribers: a link whose queue holds more than `pause_bytes` asks
+the readers feeding it to stop reading until it drains (TCP backpressure then slows the
+publisher). Only the queue counts: one big message in the socket's buffer (a scan the client
+is still reading) is no reason to hold up the publisher's next frames.
+A link that makes no progress for `STALL_S`, or stays backed up longer than `SLOW_S`, is a slow
+reader: nobody waits for it any more until it has caught up, and it drops instead.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import logging
+import time
+from collections.abc import Callable
+from concurrent.futures import Executor
+
+from websockets.asyncio.server import ServerConnection
+from websockets.protocol import State
+
+from bridge.effects import Send
+from bridge.outgoing import CBOR, CBOR_RAW, Delivery, WireFrame, render
+from bridge.reply_budget import ReplyBudget
+from bridge.sendqueue import SendQueue, Waiting
+
+logger = logging.getLogger("bridge.server")
+
+# Bytes the transport may hold for a client before messages wait in its queue instead: a few
+# thousand small frames, or one slice of a scan (the transport's own high-water mark too; less
+# when the client's bound is small).
+WRITE_HIGH_WATER = 1024 * 1024
+# Writes of at least this size are handed to the transport on their own, not joined.
+JOIN_LIMIT = 64 * 1024
+# A backed-up link that accepted no byte for this long is not waited for (it may never read).
+STALL_S = 0.2
+# A link backed up for longer than this is a slow reader: it drops rather than pace publishers.
+SLOW_S = 2.0
+POLL_S = 0.01  # how often a paused reader looks at a link's progress
+
+Delivered = Callable[[int, Delivery, int, int], None]  # client, delivery, wire bytes, ns
+
+
+def estimated_size(send: Send) -> int:
+    """Frame bytes of a large item before it is encoded: JSON spells bytes in base64."""
+    item = send.item
+    binary = isinstance(item, Delivery) and item.encoding in (CBOR, CBOR_RAW)
+    return item.size_hint if binary else item.size_hint * 4 // 3
+
+
+class ClientLink:
+    """Outgoing side of one websocket: `offer` each `Send`; `close` when the client leaves."""
+
+    def __init__(self, client_id: int, ws: ServerConnection, *, limit_bytes: int,
+                 pool: Executor, offload_bytes: int, reply_budget_bytes: int,
+                 delivered: Delivered, over_budget: Callable[[str], None]) -> None:
+        self.client_id = client_id
+        self.ws = ws
+        self.queue = SendQueue(limit_bytes)
+        # Answers are never dropped: those queued unread are bounded by closing the client.
+        self.replies = ReplyBudget(reply_budget_bytes)
+        self.over_budget = False
+        self._over_budget = over_budget
+        # What the transport may hold before messages queue (a quarter of a small bound), and
+        # the queue from which publishers feeding this link wait for it (1 MiB by default).
+        self.room_bytes = min(WRITE_HIGH_WATER, limit_bytes // 4)
+        self.pause_bytes = limit_bytes // 16
+        self.frames_sent = 0
+        self.closed = False  # the client has left
+        self.closing = False  # the bridge is closing the connection
+        self._loop = asyncio.get_running_loop()
+        self._pool = pool
+        self._offload_bytes = offload_bytes
+        self._delivered = delivered
+        self._transport = ws.transport
+        self._transport.set_write_buffer_limits(high=self.room_bytes)  # drain() wakes at 1/4
+        self._protocol = ws.protocol
+        self._busy: set[str | None] = set()  # streams with a message being encoded
+        self._fragment_seq = 0  # numbers fragment ids of messages that have no id of their own
+        self._corked = 0  # bytes framed this turn, not yet handed to the transport
+        self._handed = 0  # bytes handed to the transport since the start
+        self._flush_pending = False
+        self._just_delivered: list[tuple[Delivery, int]] = []
+        self._drain_task: asyncio.Task[None] | None = None
+        self._progress = asyncio.Event()
+        self._backed_up_since: float | None = None
+        self._stalled = False
+
+    # -- sending -----------------------------------------------------------------------------
+
+    def offer(self, send: Send) -> bool:
+        """Write `send` now or queue it; True if publishers feeding this link should pause."""
+        if self.closed or self.closing:
+            return False
+        if (not len(self.queue) and send.drop_key not in self._busy and self._has_room()
+                and not self._needs_worker(send)):
+            frames = self._render(send)
+            if frames is not None:
+                self._write(send, frames)
+            return False
+        self._enqueue(send)
+        self._service()
+        return self.wants_pause()
+
+    def _needs_worker(self, send: Send) -> bool:
+        """Encode on a worker? Only large messages whose encode leaves the GIL for part of
+        the time (base64 for JSON, zlib for PNG) or runs in Python (CDR): CBOR's encoder, and
+        the JSON of an answer, are C code holding the GIL, so a worker would stall the loop as
+        long and add a thread hop."""
+        item = send.item
+        if item.size_hint < self._offload_bytes or not isinstance(item, Delivery):
+            return False
+        return item.encoding != CBOR
+
+    def _enqueue(self, send: Send) -> None:
+        frames = None
+        if not self._needs_worker(send):
+            frames = self._render(send)  # small: exact size now; the encode is shared anyway
+            if frames is None:
+                return
+            nbytes = sum(len(f.data) for f in frames)
+        else:
+            nbytes = estimated_size(send)
+        if send.drop_key is None and not self.replies.charge(nbytes) and not self.over_budget:
+            self.over_budget = True
+            self._over_budget(self.replies.reason())  # the edge closes the client
+        victims = self.queue.push(send, nbytes, frames, self._outside_bytes())
+        if victims:
+            logger.debug("client %d: dropped %d oldest of %s", self.client_id, len(victims),
+                         send.drop_key)
+
+    def _service(self) -> None:
+        """Write waiting messages while the socket has room."""
+        while self._has_room():
+            waiting = self.queue.pop(self._busy)
+            if waiting is None:
+                break
+            if waiting.frames is None:
+                self._start_render(waiting)
+                continue
+            if waiting.send.drop_key is None:
+                self.replies.credit(waiting.nbytes)  # answers are rendered when queued
+            self._write(waiting.send, waiting.frames)
+        if len(self.queue) and not self._corked and not self._has_room():
+            self._await_drain()
+        self._note_progress()
+
+    def _render(self, send: Send, fallback_id: str | None = None) -> list[WireFrame] | None:
+        """The frames of `send`; `fallback_id` names the fragments of a message without an id
+        (taken on the loop, so that renders on the worker number them uniquely too)."""
+        if fallback_id is None:
+            fallback_id = self._next_fragment_id()
+        try:
+            return render(send.item, send.fragment_size, fallback_id)
+        except Exception:  # one unencodable message must not cost the client anything else
+            logger.exception("client %d: cannot encode a message for %s", self.client_id,
+                             send.drop_key or "a reply")
+            return None
+
+    def _start_render(self, waiting: Waiting) -> None:
+        key = waiting.send.drop_key
+        try:
+            future = self._loop.run_in_executor(self._pool, self._render, waiting.send,
+                                                self._next_fragment_id())
+        except RuntimeError:  # the pool has shut down: the server is stopping
+            return
+        self._busy.add(key)
+
+        def rendered(done: asyncio.Future[list[WireFrame] | None]) -> None:
+            self._busy.discard(key)
+            frames = None if done.cancelled() or done.exception() else done.result()
+            if frames is None or self.closed:
+                return
+            waiting.frames = frames
+            waiting.nbytes = sum(len(f.data) for f in frames)
+            self.queue.push_front(waiting)
+            self._service()
+
+        future.add_done_callback(rendered)
+
+    def _next_fragment_id(self) -> str:
+        self._fragment_seq += 1
+        return f"fragment:{self._fragment_seq}"
+
+    def _write(self, send: Send, frames: list[WireFrame]) -> None:
+        """Frame `frames` into the websocket; the bytes leave when this loop turn ends."""
+        protocol = self._protocol
+        if protocol.state is not State.OPEN:
+            return
+        nbytes = 0
+        for frame in frames:
+            if frame.text:
+                protocol.send_text(frame.data)
+            else:
+                protocol.send_binary(frame.data)
+            nbytes += len(frame.data)
+        self._corked += nbytes
+        self.frames_sent += len(frames)
+        if isinstance(send.item, Delivery):
+            self._just_delivered.append((send.item, nbytes))
+        if not self._flush_pending:
+            self._flush_pending = True
+            self._loop.call_soon(self._flush)
+
+    def _flush(self) -> None:
+        """Hand this turn's frames to the transport, small ones joined into one write."""
+        self._flush_pending = False
+        self._corked = 0
+        chunks = self._protocol.data_to_send()
+        if self._protocol.state is State.OPEN and not self._transport.is_closing():
+            self._write_chunks(chunks)  # (closing: the frames can no longer be delivered)
+        now_ns = time.time_ns()
+        for delivery, nbytes in self._just_delivered:
+            self._delivered(self.client_id, delivery, nbytes, now_ns)
+        self._just_delivered.clear()
+        if len(self.queue):
+            self._service()
+        else:
+            self._note_progress()
+
+    def _write_chunks(self, chunks: list[bytes]) -> None:
+        batch: list[bytes] = []
+        for chunk in chunks:
+            if not chunk:  # end of stream: only websockets' own closing produces it
+                continue
+            self._handed += len(chunk)
+            if len(chunk) >= JOIN_LIMIT:
+                if batch:
+                    self._transport.write(b"".join(batch))
+                    batch = []
+                self._transport.write(chunk)
+            else:
+                batch.append(chunk)
+        if batch:
+            self._transport.write(b"".join(batch) if len(batch) > 1 else batch[0])
+
+    def _await_drain(self) -> None:
+        if self._drain_task is None and not self.closed:
+            self._drain_task = self._loop.create_task(self._drain())
+
+    async def _drain(self) -> None:
+        try:
+            await self.ws.drain()
+        except Exception:  # the connection is going; the reader notices and closes the link
+            return
+        finally:
+            self._drain_task = None
+        if not self.closed:
+            self._service()  # (notes the progress, which wakes paused readers)
+
+    def close(self) -> None:
+        """The client left: forget what waits and wake anyone waiting for this link."""
+        self.closed = True
+        self.queue.clear()
+        if self._drain_task is not None:
+            self._drain_task.cancel()
+        self._progress.set()
+
+    # -- room and pacing ---------------------------------------------------------------------
+
+    def _outside_bytes(self) -> int:
+        return self._transport.get_write_buffer_size() + self._corked
+
+    def _has_room(self) -> bool:
+        return self._outside_bytes() <= self.room_bytes
+
+    def backlog_bytes(self) -> int:
+        """Bytes this client has not taken yet: in the transport, framed, or queued."""
+        return self._outside_bytes() + self.queue.bytes
+
+    def _accepted_bytes(self) -> int:
+        """Bytes the kernel has taken from this link's transport so far."""
+        return self._handed - self._transport.get_write_buffer_size()
+
+    def _note_progress(self) -> None:
+        self._progress.set()
+        if self.queue.bytes <= self.pause_bytes:
+            self._backed_up_since = None
+            self._stalled = False
+
+    @property
+    def gone(self) -> bool:
+        """The client left, or its connection is closing (nothing more will drain)."""
+        return self.closed or self.closing or self._transport.is_closing()
+
+    def wants_pause(self) -> bool:
+        """Should readers feeding this link wait for it before reading on?"""
+        if self.gone or self._stalled or self.queue.bytes <= self.pause_bytes:
+            return False
+        now = self._loop.time()
+        if self._backed_up_since is None:
+            self._backed_up_since = now
+        elif now - self._backed_up_since >= SLOW_S:
+            self._give_up(f"has been backed up for {SLOW_S:g} s")
+            return False
+        return True
+
+    def _give_up(self, why: str) -> None:
+        """Stop pacing publishers for this link until it has caught up; it drops instead."""
+        self._stalled = True
+        logger.info("client %d %s: publishers no longer wait for it; past %d bytes it loses "
+                    "its oldest messages per topic", self.client_id, why, self.queue.limit_bytes)
+
+    async def drained(self) -> None:
+        """Return once the queue is under `pause_bytes`, or the link has proved stalled or
+        slow (it then drops instead of pacing anyone until it catches up)."""
+        mark, since = self._accepted_bytes(), self._loop.time()
+        while self.wants_pause():
+            if not self._corked:
+                self._await_drain()  # the transport tells when it is down to its low mark
+            self._progress.clear()
+            with contextlib.suppress(TimeoutError):
+                async with asyncio.timeout(POLL_S):
+                    await self._progress.wait()
+            accepted = self._accepted_bytes()
+            if accepted != mark:
+                mark, since = accepted, self._loop.time()
+            elif self._loop.time() - since > STALL_S:
+                self._give_up(f"took no byte for {STALL_S:g} s")
+
+    async def answers_taken(self, limit: int) -> None:
+        """Return once at most `limit` undroppable items wait (or the link closed)."""
+        while self.queue.answers_waiting > limit and not self.gone:
+            self._progress.clear()
+            with contextlib.suppress(TimeoutError):
+                async with asyncio.timeout(POLL_S):
+                    await self._progress.wait()
