@@ -56,7 +56,7 @@ from navigation.node import SENSOR_INPUTS, NavigationNode  # noqa: E402
 from navigation.processors import OUTPUT_TYPES, TOPIC_BOXES, Processors  # noqa: E402
 from navigation.radar import PolarGeometry, detect, detection_array_msg, radar_power  # noqa: E402
 from schemas.pointcloud import pack_points, view_points  # noqa: E402
-from schemas.process_tuning import single_threaded_blas  # noqa: E402
+from schemas.runtime.process import single_threaded_blas  # noqa: E402
 
 log = logging.getLogger("benchmarks.navigation")
 

@@ -344,7 +344,7 @@ def cpu_s(pid: int | None = None) -> float:
 
 def run_role(role: str, pipe: Connection, *args: Any) -> None:
     """Entry point of a spawned process: tuned like every riverbridge process."""
-    from schemas.process_tuning import freeze_startup_heap, tune_process
+    from schemas.runtime.process import freeze_startup_heap, tune_process
     tune_process()
     freeze_startup_heap()
     asyncio.run((subscriber if role == "sub" else publisher)(pipe, *args))

@@ -46,7 +46,7 @@ from sim_processes import header_stamp_s, running_bridge  # noqa: E402
 from clients import RosbridgeClient  # noqa: E402
 from schemas.catalogue import TOPICS as CATALOGUE  # noqa: E402
 from schemas.catalogue import published_by  # noqa: E402
-from schemas.process_tuning import single_threaded_blas  # noqa: E402
+from schemas.runtime.process import single_threaded_blas  # noqa: E402
 from simulator.camera import Camera  # noqa: E402
 from simulator.config import SimConfig  # noqa: E402
 from simulator.dynamics import Command, VesselDynamics, VesselState  # noqa: E402

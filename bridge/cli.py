@@ -18,8 +18,8 @@ from bridge.config import AUTH_SECRET_ENV, MIB, MIN_SEND_BUFFER, BridgeConfig
 from bridge.dds.options import add_dds_options, dds_config_fields, print_config
 from bridge.errors import DdsStartError
 from bridge.server import run_bridge
-from schemas.process_tuning import freeze_startup_heap, tune_process
 from schemas.rosauth import read_secret
+from schemas.runtime.process import freeze_startup_heap, tune_process
 
 logger = logging.getLogger("bridge.cli")
 

@@ -32,13 +32,14 @@ from bridge.outgoing import MIN_FRAGMENT_SIZE, TopicMessage, payload_size
 from bridge.rosapi import ROSAPI_SERVICES
 from bridge.session import ClientSession
 from bridge.sinks import MessageSink
+from schemas.codec_cdr import cdr_size
 from schemas.errors import SchemaError
 from schemas.message import normalize
 from schemas.ops import MAX_NAME_CHARS, OpError, parse_op, parse_publish, reply_id
 from schemas.registry import TypeRegistry
 from schemas.safety import echo, safe_text
 from schemas.specs import MessageSpec
-from schemas.tracing import cdr_size, header_stamp_ns
+from schemas.tracing import header_stamp_ns
 
 logger = logging.getLogger("bridge.core")
 

@@ -22,6 +22,7 @@ from bridge.http import respond
 from bridge.metrics import CONTENT_TYPE, MetricsSnapshot, render_metrics
 from bridge.rosapi.common import RosapiService
 from bridge.tracing import BridgeTracer
+from schemas.runtime.telemetry import ResourceSampler, telemetry_ticks, this_process
 from schemas.supervision import RESTARTS_TOPIC, restart_counts
 from schemas.tracing import (
     PUBLISH_PERIOD_S,
@@ -32,10 +33,8 @@ from schemas.tracing import (
     TRACE_PERIOD_S,
     TRACE_TOPIC,
     TRACE_TYPE,
-    ResourceSampler,
     process_stats_msg,
     span_array_msg,
-    telemetry_ticks,
 )
 
 if TYPE_CHECKING:
@@ -62,6 +61,7 @@ class BridgeTelemetry:
                                                                self._answer_stats)
         server.http.add("/metrics", self.metrics_page)
         self._sampler = ResourceSampler()
+        self._identity = this_process(PROCESS_NAME)
         self.cpu_percent = 0.0
         self._started_ns = time.time_ns()
         self._client_count: int | None = None
@@ -145,7 +145,7 @@ class BridgeTelemetry:
         if not spans or not self._listened(TRACE_TOPIC):
             return []
         return self._core.publish_external(BRIDGE_NODE, TRACE_TOPIC, TRACE_TYPE,
-                                           span_array_msg(PROCESS_NAME, spans), time.time_ns())
+                                           span_array_msg(self._identity, spans), time.time_ns())
 
     def publish_once(self) -> list[Effect]:
         """`publish_spans`, and the bridge's ProcessStats for whoever subscribes to them."""
@@ -162,7 +162,7 @@ class BridgeTelemetry:
                     "dropped": sum(self.drops().values())}
         effects += self._core.publish_external(
             BRIDGE_NODE, STATS_TOPIC, STATS_TYPE,
-            process_stats_msg(PROCESS_NAME, now_ns, self.cpu_percent,
+            process_stats_msg(self._identity, now_ns, self.cpu_percent,
                               self._sampler.rss_bytes(), counters), now_ns)
         return effects
 

@@ -14,12 +14,12 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 from bridge.outgoing import Delivery, TopicMessage
+from schemas.codec_cdr import cdr_size
 from schemas.errors import SchemaError
 from schemas.tracing import (
     SPAN_CAPACITY,
     STATS_TOPIC,
     SpanBuffer,
-    cdr_size,
     header_stamp_ns,
     is_traced,
 )

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 from clients.client import RosbridgeClient
 from clients.protocol import Encoding
 from clients.tracing import Tracer, telemetry
-from schemas.process_tuning import freeze_startup_heap, tune_process
+from schemas.runtime.process import freeze_startup_heap, tune_process
 
 
 @dataclass(frozen=True)

@@ -20,6 +20,7 @@ from collections.abc import AsyncIterator, Callable, Sequence
 from typing import TYPE_CHECKING, Any
 
 from clients.events import Received
+from schemas.runtime.telemetry import ResourceSampler, telemetry_ticks, this_process
 from schemas.tracing import (
     PUBLISH_PERIOD_S,
     SPAN_CAPACITY,
@@ -28,13 +29,11 @@ from schemas.tracing import (
     TRACE_PERIOD_S,
     TRACE_TOPIC,
     TRACE_TYPE,
-    ResourceSampler,
     SpanBuffer,
     header_stamp_ns,
     is_traced,
     process_stats_msg,
     span_array_msg,
-    telemetry_ticks,
 )
 
 if TYPE_CHECKING:
@@ -54,6 +53,7 @@ class Tracer:
         self.spans = SpanBuffer(capacity)
         self.counters = {"messages_out": 0, "messages_in": 0, "bytes_out": 0, "bytes_in": 0}
         self._sampler = ResourceSampler()
+        self._identity = this_process(process)
         self._decoded: OrderedDict[tuple[str, int], int] = OrderedDict()
 
     def record(self, topic: str, stamp_ns: int, stage: str, start_ns: int, end_ns: int,
@@ -107,11 +107,11 @@ class Tracer:
     def batch_msg(self) -> dict[str, Any] | None:
         """The spans recorded since the last batch as a TraceSpanArray, or None if none."""
         spans = self.spans.drain()
-        return span_array_msg(self.process, spans) if spans else None
+        return span_array_msg(self._identity, spans) if spans else None
 
     def stats_msg(self, now_ns: int, dropped: int) -> dict[str, Any]:
         """This process's ProcessStats now; ``dropped`` counts messages its queues dropped."""
-        return process_stats_msg(self.process, now_ns, self._sampler.cpu_percent(),
+        return process_stats_msg(self._identity, now_ns, self._sampler.cpu_percent(),
                                  self._sampler.rss_bytes(), {**self.counters, "dropped": dropped})
 
 

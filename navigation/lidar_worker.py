@@ -28,7 +28,7 @@ import numpy as np
 
 from navigation.config import LidarConfig
 from navigation.lidar import LidarResult, process_scan
-from schemas.process_tuning import background_priority, tune_process
+from schemas.runtime.process import background_priority, tune_process
 
 log = logging.getLogger(__name__)
 

@@ -33,7 +33,7 @@ from navigation.processors import (
     Processors,
 )
 from schemas.catalogue import TOPICS, consumed_by, period_s
-from schemas.process_tuning import background_priority
+from schemas.runtime.process import background_priority
 from schemas.tracing import header_stamp_ns
 
 log = logging.getLogger(__name__)

@@ -126,3 +126,15 @@ def from_cdr(registry: TypeRegistry, type_name: str, data: bytes) -> dict:
     except Exception as exc:  # rosbags raises assorted errors on short or corrupt data
         raise DecodeError(f"invalid CDR for {spec.name}: {exc!r}") from None
     return _to_canonical(spec, obj)
+
+
+def cdr_size(registry: TypeRegistry, type_name: str, msg: dict) -> int:
+    """Serialized size of ``msg`` in bytes (4-byte header included), without serializing.
+
+    Uses rosbags' size function on zero-copy views of the arrays: ~10 µs for a 4 MB cloud
+    where :func:`to_cdr` takes ~2 ms.
+    """
+    spec = registry.message(type_name)
+    store = registry.typestore
+    obj = _to_object(store.types, spec, msg)
+    return 4 + int(store.get_msgdef(spec.name).getsize_cdr(0, obj, store))

@@ -1,25 +1,18 @@
-"""Stage-tracing pieces shared by the bridge and the clients (docs/tracing.md).
+"""Stage-tracing data shared by the bridge and the clients (docs/tracing.md).
 
-The bridge may not import `clients`, and both record spans the same way, so the recorder,
-the resource sampler and the message builders live here. Recording is one tuple append per
-stage; nothing here does I/O except reading this process's own /proc entries.
+The bridge may not import `clients`, and both record spans the same way, so the span
+recorder, the telemetry topics and the message builders live here. Recording is one tuple
+append per stage. Nothing here does I/O or reads a clock: what a process measures of itself
+(CPU, memory, host) comes from `schemas.runtime.telemetry`.
 """
 
 from __future__ import annotations
 
-import asyncio
-import os
-import socket
-import time
 from collections import deque
-from collections.abc import AsyncIterator
-from typing import TYPE_CHECKING, Any
+from dataclasses import dataclass
+from typing import Any
 
 from schemas.catalogue import TOPICS, period_s
-from schemas.codec_cdr import _to_object
-
-if TYPE_CHECKING:
-    from schemas.registry import TypeRegistry
 
 TRACE_TOPIC, TRACE_TYPE = TOPICS["trace"].pair
 STATS_TOPIC, STATS_TYPE = TOPICS["process_stats"].pair
@@ -55,18 +48,6 @@ def header_stamp_ns(msg: Any) -> int | None:
         return None
 
 
-def cdr_size(registry: TypeRegistry, type_name: str, msg: dict[str, Any]) -> int:
-    """Serialized ROS 2 size of `msg` in bytes (4-byte header included), without serializing.
-
-    Uses rosbags' size function on zero-copy views of the arrays: ~10 µs for a 4 MB cloud
-    where `to_cdr` takes ~2 ms.
-    """
-    spec = registry.message(type_name)
-    store = registry.typestore
-    obj = _to_object(store.types, spec, msg)
-    return 4 + int(store.get_msgdef(spec.name).getsize_cdr(0, obj, store))
-
-
 class SpanBuffer:
     """Spans recorded by one process, waiting for the next batch.
 
@@ -94,65 +75,34 @@ class SpanBuffer:
         return spans
 
 
-def span_array_msg(process: str, spans: list[Span], host: str | None = None) -> dict[str, Any]:
-    """`riverbridge_msgs/msg/TraceSpanArray` (canonical form) of `spans` recorded by `process`."""
-    return {"host": host or socket.gethostname(), "spans": [
+@dataclass(frozen=True, slots=True)
+class ProcessIdentity:
+    """Who records: the process name the report shows, its pid and host."""
+
+    process: str
+    pid: int
+    host: str
+
+
+def span_array_msg(who: ProcessIdentity, spans: list[Span]) -> dict[str, Any]:
+    """`riverbridge_msgs/msg/TraceSpanArray` (canonical form) of `spans` recorded by `who`."""
+    process = who.process
+    return {"host": who.host, "spans": [
         {"topic": topic, "stamp_ns": stamp_ns, "stage": stage, "process": process, "peer": peer,
          "start_ns": start_ns, "end_ns": end_ns, "payload_bytes": payload_bytes,
          "wire_bytes": wire_bytes}
         for topic, stamp_ns, stage, peer, start_ns, end_ns, payload_bytes, wire_bytes in spans]}
 
 
-class ResourceSampler:
-    """CPU share since the previous sample (`os.times`) and resident memory (/proc/self/statm)."""
-
-    def __init__(self) -> None:
-        self._page_bytes = os.sysconf("SC_PAGE_SIZE") if hasattr(os, "sysconf") else 4096
-        self._last_cpu_s, self._last_wall_s = self._cpu_s(), time.monotonic()
-
-    @staticmethod
-    def _cpu_s() -> float:
-        times = os.times()
-        return times.user + times.system
-
-    def rss_bytes(self) -> int:
-        try:
-            with open("/proc/self/statm", "rb") as statm:
-                return int(statm.read().split()[1]) * self._page_bytes
-        except (OSError, IndexError, ValueError):
-            import resource  # not Linux: peak RSS is the best available (kB on Linux/BSD)
-            return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
-
-    def cpu_percent(self) -> float:
-        """Percent of one core used since the previous call (100 = one core busy)."""
-        cpu_s, wall_s = self._cpu_s(), time.monotonic()
-        elapsed_s = wall_s - self._last_wall_s
-        share = (cpu_s - self._last_cpu_s) / elapsed_s if elapsed_s > 0 else 0.0
-        self._last_cpu_s, self._last_wall_s = cpu_s, wall_s
-        return 100.0 * share
-
-
-def process_stats_msg(process: str, now_ns: int, cpu_percent: float, rss_bytes: int,
+def process_stats_msg(who: ProcessIdentity, now_ns: int, cpu_percent: float, rss_bytes: int,
                       counters: dict[str, int]) -> dict[str, Any]:
     """`riverbridge_msgs/msg/ProcessStats` (canonical form); `counters` names its uint64s."""
     sec, nanosec = divmod(now_ns, NS_PER_S)
     return {"header": {"stamp": {"sec": sec, "nanosec": nanosec}, "frame_id": ""},
-            "process": process, "pid": os.getpid(), "host": socket.gethostname(),
+            "process": who.process, "pid": who.pid, "host": who.host,
             "cpu_percent": float(cpu_percent), "rss_bytes": int(rss_bytes),
             "messages_out": counters.get("messages_out", 0),
             "messages_in": counters.get("messages_in", 0),
             "bytes_out": counters.get("bytes_out", 0), "bytes_in": counters.get("bytes_in", 0),
             "dropped": counters.get("dropped", 0)}
 
-
-async def telemetry_ticks(period_s: float = PUBLISH_PERIOD_S,
-                          trace_period_s: float = TRACE_PERIOD_S) -> AsyncIterator[bool]:
-    """Wake every `trace_period_s` (span batches) and say whether stats are due as well (every
-    `period_s`); runs until cancelled. The bridge and the client processes share the rhythm."""
-    step_s = min(trace_period_s, period_s)
-    ticks_per_stats = max(1, round(period_s / step_s))
-    tick = 0
-    while True:
-        await asyncio.sleep(step_s)
-        tick += 1
-        yield tick % ticks_per_stats == 0

@@ -31,7 +31,7 @@ from clients.node_links import node_links
 from clients.protocol import Encoding
 from clients.tracing import Tracer
 from schemas.catalogue import TOPICS, Topic, published_by
-from schemas.process_tuning import background_priority
+from schemas.runtime.process import background_priority
 from simulator.config import SimConfig
 from simulator.dynamics import Command, StepResult, VesselDynamics, VesselState
 from simulator.scene import Scene, build_scene

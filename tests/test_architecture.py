@@ -2,12 +2,19 @@
 
 from __future__ import annotations
 
+import ast
 import shutil
 import subprocess
 import sys
+from collections.abc import Iterator
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
+PACKAGES = ("bridge", "simulator", "navigation", "schemas", "clients")
+# What the message layer (schemas, apart from schemas.runtime) may not touch: it does no I/O,
+# keeps no time and starts no threads; process-level helpers live in schemas.runtime.
+RUNTIME_ONLY = ("asyncio", "socket", "threading", "time", "gc", "os", "threadpoolctl",
+                "schemas.runtime")
 
 
 def _run(*cmd: str) -> subprocess.CompletedProcess[str]:
@@ -26,3 +33,38 @@ def test_import_contracts_hold() -> None:
 def test_ruff_is_clean() -> None:
     result = _run(sys.executable, "-m", "ruff", "check", ".")
     assert result.returncode == 0, result.stdout + result.stderr
+
+
+def _imports(path: Path) -> Iterator[tuple[str, list[str], int]]:
+    """(module, imported names, line) of every import statement in `path`."""
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if isinstance(node, ast.Import):
+            for alias in node.names:
+                yield alias.name, [], node.lineno
+        elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
+            yield node.module, [alias.name for alias in node.names], node.lineno
+
+
+def _sources(*packages: str) -> Iterator[Path]:
+    for package in packages:
+        yield from sorted((ROOT / package).rglob("*.py"))
+
+
+def test_the_message_layer_does_no_runtime_work() -> None:
+    """schemas' message modules import no clock, socket, thread or process helpers."""
+    offences = [f"{path.relative_to(ROOT)}:{line}: {module}"
+                for path in _sources("schemas") if "runtime" not in path.parts
+                for module, _names, line in _imports(path)
+                if any(module == banned or module.startswith(banned + ".")
+                       for banned in RUNTIME_ONLY)]
+    assert not offences, "\n".join(offences)
+
+
+def test_no_private_names_cross_modules() -> None:
+    """A leading underscore means "this module's own": no other module imports it."""
+    offences = [f"{path.relative_to(ROOT)}:{line}: {module}.{name}"
+                for path in _sources(*PACKAGES)
+                for module, names, line in _imports(path)
+                if module.split(".")[0] in PACKAGES
+                for name in names if name.startswith("_")]
+    assert not offences, "\n".join(offences)

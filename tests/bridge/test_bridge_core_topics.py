@@ -308,7 +308,7 @@ def test_a_prepared_publish_is_not_validated_again_and_keeps_its_sizes(harness):
     import json
 
     from bridge.inbound import PreparedMessage
-    from schemas.tracing import cdr_size
+    from schemas.codec_cdr import cdr_size
 
     pub = harness.connect()
     advertise(harness, pub, topic="/fix", type_name="sensor_msgs/NavSatFix", latch=True)

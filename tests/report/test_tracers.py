@@ -7,16 +7,15 @@ import pytest
 
 from clients.events import Received
 from clients.tracing import Tracer
-from schemas.codec_cdr import to_cdr
+from schemas.codec_cdr import cdr_size, to_cdr
 from schemas.message import normalize
 from schemas.registry import TypeRegistry
+from schemas.runtime.telemetry import telemetry_ticks, this_process
 from schemas.tracing import (
     TRACE_TOPIC,
     SpanBuffer,
-    cdr_size,
     header_stamp_ns,
     span_array_msg,
-    telemetry_ticks,
 )
 
 STAMPED = {"header": {"stamp": {"sec": 3, "nanosec": 5}, "frame_id": "imu"}}
@@ -76,7 +75,7 @@ def test_batch_message_carries_process_and_host():
 
 
 def test_batches_and_stats_are_valid_messages(registry):
-    batch = span_array_msg("bridge", [("/t", 1, "fanout", "navigation", 2, 3, 0, 99)])
+    batch = span_array_msg(this_process("bridge"), [("/t", 1, "fanout", "navigation", 2, 3, 0, 99)])
     normalize(registry.message("riverbridge_msgs/msg/TraceSpanArray"), batch, now_ns=0)
     stats = Tracer("x").stats_msg(10**18, dropped=4)
     checked = normalize(registry.message("riverbridge_msgs/msg/ProcessStats"), stats, now_ns=0)

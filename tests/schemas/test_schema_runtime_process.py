@@ -10,7 +10,7 @@ import sys
 import threading
 from pathlib import Path
 
-from schemas.process_tuning import background_priority, freeze_startup_heap
+from schemas.runtime.process import background_priority, freeze_startup_heap
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -51,7 +51,7 @@ def test_openblas_is_kept_to_one_thread_for_the_whole_process() -> None:
     probe = (
         "import json, numpy\n"
         "from threadpoolctl import threadpool_info\n"
-        "from schemas.process_tuning import single_threaded_blas\n"
+        "from schemas.runtime.process import single_threaded_blas\n"
         "single_threaded_blas()\n"
         "a = numpy.ones((300, 3), numpy.float32) @ numpy.eye(3, dtype=numpy.float32)\n"
         "print(json.dumps([p['num_threads'] for p in threadpool_info()"
