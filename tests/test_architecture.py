@@ -35,6 +35,12 @@ def test_ruff_is_clean() -> None:
     assert result.returncode == 0, result.stdout + result.stderr
 
 
+def test_mypy_strict_is_clean() -> None:
+    """The packages listed in pyproject's `[tool.mypy] files` type-check under --strict."""
+    result = _run(sys.executable, "-m", "mypy")
+    assert result.returncode == 0, result.stdout + result.stderr
+
+
 def _imports(path: Path) -> Iterator[tuple[str, list[str], int]]:
     """(module, imported names, line) of every import statement in `path`."""
     for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
