@@ -9,25 +9,16 @@ from __future__ import annotations
 
 import contextlib
 import logging
-from collections.abc import Callable, Hashable
+from collections.abc import Callable
 from typing import Any
 
 from bridge.config import BridgeConfig
 from bridge.context import BridgeState, Context, log_problem_summary
-from bridge.effects import Effect
+from bridge.effects import DeadlineKey, Effect
 from bridge.errors import BridgeError, InvalidNameError
 from bridge.inbound import PreparedMessage, RefusedFrame, decode_frame
 from bridge.names import absolute_name
-from bridge.ops import (
-    Handler,
-    actions,
-    auth,
-    fragments,
-    levels,
-    merge_tables,
-    services,
-    topics,
-)
+from bridge.ops import OpRoute, actions, auth, fragments, levels, merge_routes, services, topics
 from bridge.outgoing import MIN_FRAGMENT_SIZE, TopicMessage, payload_size
 from bridge.rosapi import ROSAPI_SERVICES
 from bridge.session import ClientSession
@@ -35,17 +26,17 @@ from bridge.sinks import MessageSink
 from schemas.codec_cdr import cdr_size
 from schemas.errors import SchemaError
 from schemas.message import normalize
-from schemas.ops import MAX_NAME_CHARS, OpError, parse_op, parse_publish, reply_id
+from schemas.ops import MAX_NAME_CHARS, OpError, reply_id
 from schemas.registry import TypeRegistry
 from schemas.safety import echo, safe_text
 from schemas.specs import MessageSpec
 from schemas.tracing import header_stamp_ns
+from schemas.values import JsonObject, JsonValue, OpId
 
 logger = logging.getLogger("bridge.core")
 
-OP_HANDLERS: dict[str, Handler] = merge_tables(
-    topics.HANDLERS, services.HANDLERS, actions.HANDLERS, fragments.HANDLERS, levels.HANDLERS,
-    auth.HANDLERS)
+OP_ROUTES: dict[str, OpRoute] = merge_routes(
+    topics.ROUTES, services.ROUTES, actions.ROUTES, fragments.ROUTES, levels.ROUTES, auth.ROUTES)
 
 # Deadline keys are tuples whose first item selects the handler; the rest are its arguments.
 DEADLINE_HANDLERS: dict[str, Callable[..., None]] = {
@@ -194,13 +185,14 @@ class BridgeCore:
             self._dispatch(ctx, session, message)
         except Exception as exc:
             head = message if isinstance(message, dict) else {}
-            ctx.problem(session, head.get("op", "?"), reply_id(head.get("id")),
+            ctx.problem(session, str(head.get("op", "?")), reply_id(head.get("id")),
                         f"internal error: {echo(exc)}", exc_info=exc)
             with contextlib.suppress(Exception):
                 answer_failed_request(ctx, session, head, f"internal error: {echo(exc)}",
                                       log=False)
 
-    def _dispatch(self, ctx: Context, session: ClientSession, message: Any) -> None:
+    def _dispatch(self, ctx: Context, session: ClientSession,
+                  message: JsonValue | RefusedFrame) -> None:
         if isinstance(message, RefusedFrame):
             answer_failed_request(ctx, session, message.head, message.problem)
             return
@@ -209,35 +201,34 @@ class BridgeCore:
                         f"message must be a JSON object, got {type(message).__name__}")
             return
         op_name, op_id = message.get("op"), reply_id(message.get("id"))
+        shown_op = safe_text(str(op_name), 60) if op_name is not None else "?"
         if "fragment_size" in message:
-            set_fragment_size(ctx, session, message["fragment_size"], op_name, op_id)
-        if not isinstance(op_name, str) or op_name not in OP_HANDLERS:
+            set_fragment_size(ctx, session, message["fragment_size"], shown_op, op_id)
+        route = OP_ROUTES.get(op_name) if isinstance(op_name, str) else None
+        if route is None:
             what = ("message without an op" if op_name is None
-                    else f"Unknown operation: {safe_text(str(op_name), 60)}")
-            ctx.problem(session, op_name, op_id, what)
+                    else f"Unknown operation: {shown_op}")
+            ctx.problem(session, shown_op, op_id, what)
             return
-        if not session.authenticated and op_name != "auth":
+        if not session.authenticated and route.op != "auth":
             answer_failed_request(ctx, session, message, "not authenticated: this bridge needs "
                                   "a valid auth op (rosauth) before any other")
             return
-        handler = OP_HANDLERS[op_name]
         try:
-            op = parse_publish(message) if op_name == "publish" else parse_op(message)
-        except OpError as exc:
+            route.run(ctx, session, message)
+        except OpError as exc:  # the op did not parse: nothing was handled
             answer_failed_request(ctx, session, message, f"malformed op: {exc}")
-            return
-        try:
-            handler(ctx, session, op)
         except (BridgeError, SchemaError) as exc:
-            ctx.problem(session, op_name, op_id, str(exc))
+            ctx.problem(session, route.op, op_id, str(exc))
 
     # -- time --------------------------------------------------------------------------------
 
-    def on_deadline(self, key: Hashable, now_ns: int) -> list[Effect]:
+    def on_deadline(self, key: DeadlineKey, now_ns: int) -> list[Effect]:
         """A deadline scheduled with `Schedule(key, at_ns)` has come."""
         ctx = Context(self.state, now_ns)
-        if isinstance(key, tuple) and key and key[0] in DEADLINE_HANDLERS:
-            DEADLINE_HANDLERS[key[0]](ctx, *key[1:])
+        handler = DEADLINE_HANDLERS.get(key[0]) if key and isinstance(key[0], str) else None
+        if handler is not None:
+            handler(ctx, *key[1:])
         return ctx.effects
 
     # -- the middleware seam -----------------------------------------------------------------
@@ -269,8 +260,8 @@ class BridgeCore:
         return ctx.effects
 
 
-def set_fragment_size(ctx: Context, session: ClientSession, value: Any, op_name: Any,
-                      op_id: Any) -> None:
+def set_fragment_size(ctx: Context, session: ClientSession, value: JsonValue, op_name: str,
+                      op_id: OpId) -> None:
     """Any message carrying `fragment_size` sets the client-wide size (protocol §1.2)."""
     if value is None:
         session.fragment_size = None
@@ -281,7 +272,7 @@ def set_fragment_size(ctx: Context, session: ClientSession, value: Any, op_name:
                     f"fragment_size must be a positive integer or null, got {echo(value, 60)}")
 
 
-def answer_failed_request(ctx: Context, session: ClientSession, message: dict[str, Any],
+def answer_failed_request(ctx: Context, session: ClientSession, message: JsonObject,
                           problem: str, log: bool = True) -> None:
     """Log an op that could not be handled; a caller waiting for an answer still gets one.
 
@@ -293,7 +284,8 @@ def answer_failed_request(ctx: Context, session: ClientSession, message: dict[st
     op_name, op_id = message.get("op"), reply_id(message.get("id"))
     problem = safe_text(problem)
     if log:
-        ctx.problem(session, op_name if op_name is not None else "?", op_id, problem)
+        ctx.problem(session, safe_text(str(op_name), 60) if op_name is not None else "?", op_id,
+                    problem)
     service, action = message.get("service"), message.get("action")
     if op_name == "call_service" and isinstance(service, str):
         services.respond(ctx, session.client_id, service[:MAX_NAME_CHARS], op_id, problem,

@@ -232,12 +232,19 @@ class UnadvertiseAction(OpBase):
 # -- framing and status -----------------------------------------------------------------------
 
 
+def _fragment_id(value: JsonValue) -> str | int:
+    if isinstance(value, bool) or not isinstance(value, str | int):
+        raise ValueError("must be a string or an integer")
+    _check_id(value)
+    return value
+
+
 class Fragment(OpBase):
     op: Literal["fragment"] = "fragment"
-    id: Id
+    id: Annotated[str | int, PlainValidator(_fragment_id)]  # keys the pieces of one message
     data: StrictStr
-    num: StrictInt
-    total: StrictInt  # rosbridge sends a float ((len-1)/size + 1); clients floor it
+    num: StrictInt  # 0 <= num < total, checked against the first fragment's total
+    total: Annotated[StrictInt, Field(ge=1)]  # rosbridge sends a float ((len-1)/size + 1)
 
     @field_validator("total", mode="before")
     @classmethod
