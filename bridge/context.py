@@ -18,6 +18,7 @@ from schemas.safety import echo, safe_text
 from schemas.values import JsonObject, OpId
 
 if TYPE_CHECKING:
+    from bridge.inbound import InboundFrame
     from bridge.rosapi.common import RosapiService
 
 logger = logging.getLogger("bridge.core")
@@ -71,11 +72,15 @@ class BridgeState:
 
 
 class Context:
-    """One core call: the state, the time it happens at, and the effects produced."""
+    """One core call: the state, the time it happens at, the client's frame it handles (None
+    for a call that handles none: a deadline, an in-process source) and the effects produced.
+    """
 
-    def __init__(self, state: BridgeState, now_ns: int) -> None:
+    def __init__(self, state: BridgeState, now_ns: int,
+                 frame: InboundFrame | None = None) -> None:
         self.state = state
         self.now_ns = now_ns
+        self.frame = frame
         self.effects: list[Effect] = []
         # Texts of completed fragment lists, fed back to the core as inbound messages.
         self.reassembled: list[str] = []

@@ -10,27 +10,25 @@ from __future__ import annotations
 import contextlib
 import logging
 from collections.abc import Callable
-from typing import Any
 
 from bridge.config import BridgeConfig
 from bridge.context import BridgeState, Context, log_problem_summary
 from bridge.effects import DeadlineKey, Effect
 from bridge.errors import BridgeError, InvalidNameError
-from bridge.inbound import PreparedMessage, RefusedFrame, decode_frame
+from bridge.inbound import InboundFrame, RefusedFrame, decode_frame, read_frame
 from bridge.names import absolute_name
 from bridge.ops import OpRoute, actions, auth, fragments, levels, merge_routes, services, topics
 from bridge.outgoing import MIN_FRAGMENT_SIZE, TopicMessage, payload_size
 from bridge.rosapi import ROSAPI_SERVICES
 from bridge.session import ClientSession
 from bridge.sinks import MessageSink
-from schemas.codec_cdr import cdr_size
+from bridge.validation import PublishCheck
 from schemas.errors import SchemaError
 from schemas.message import normalize
 from schemas.ops import MAX_NAME_CHARS, OpError, reply_id
 from schemas.registry import TypeRegistry
 from schemas.safety import echo, safe_text
 from schemas.specs import MessageSpec
-from schemas.tracing import header_stamp_ns
 from schemas.values import JsonObject, JsonValue, OpId
 
 logger = logging.getLogger("bridge.core")
@@ -92,56 +90,38 @@ class BridgeCore:
 
     # -- inbound -----------------------------------------------------------------------------
 
-    def receive(self, client_id: int, data: bytes | str, now_ns: int) -> list[Effect]:
-        """Handle one websocket frame (text = JSON, binary = CBOR or JSON)."""
+    def receive(self, client_id: int, data: bytes | str, arrived_ns: int,
+                now_ns: int) -> list[Effect]:
+        """Decode and handle one websocket frame (text = JSON, binary = CBOR or JSON) that was
+        read at `arrived_ns`. The edge splits this up: `read_frame`, `offload`, `receive_frame`.
+        """
         try:
-            decoded = decode_frame(data)
+            frame = read_frame(data, arrived_ns)
         except SchemaError as exc:
             return self.receive_invalid(client_id, str(exc), now_ns)
-        return self.receive_decoded(client_id, decoded, now_ns)
+        return self.receive_frame(client_id, frame, now_ns)
 
-    def prepare(self, data: bytes | str, now_ns: int) -> Any:
-        """Decode a frame and pre-validate a publish's message (`prepare_decoded`)."""
-        return self.prepare_decoded(decode_frame(data), len(data), now_ns)
+    def offload(self, frame: InboundFrame, now_ns: int) -> PublishCheck | None:
+        """The work `frame` needs off the event loop, or None to handle it at once.
 
-    def needs_worker(self, message: Any, wire_bytes: int) -> bool:
-        """Is validating this decoded frame worth a worker thread? Yes for a publish whose
-        message is not mostly bytes and arrays: its validation runs in Python (nested messages)
-        or outside the GIL (base64), while bulk bytes and arrays cost microseconds."""
-        if not isinstance(message, dict) or message.get("op") != "publish":
-            return False
-        msg = message.get("msg")
-        return isinstance(msg, dict) and payload_size(msg) * 2 < wire_bytes
-
-    def prepare_decoded(self, message: Any, wire_bytes: int, now_ns: int) -> Any:
-        """Pre-validate a decoded publish's message; meant for a worker thread.
-
-        Everything a large publish costs in proportion to its size happens here, off the event
-        loop: base64 decode of byte arrays, validation of every nested message, the size
-        figures. It only reads the graph (the topic's type); the handler takes the
-        `PreparedMessage` as it is when the type is unchanged. Hand the result to
-        `receive_decoded`; a message that does not validate is left for the handler to refuse.
+        A publish of at least `offload_threshold_bytes` whose message is not mostly bytes and
+        arrays: checking it runs in Python (nested messages) or outside the GIL (base64),
+        while bulk bytes and arrays cost microseconds. The check reads the topic's type now;
+        hand its result back as `frame.checked` to `receive_frame`.
         """
-        if isinstance(message, dict) and message.get("op") == "publish":
-            spec = self._presumed_spec(message)
-            if spec is not None and isinstance(message.get("msg"), dict):
-                with contextlib.suppress(SchemaError):
-                    msg = normalize(spec, message["msg"], now_ns=now_ns)
-                    message = {**message, "msg": PreparedMessage(
-                        msg, spec, max(wire_bytes, payload_size(msg)),
-                        self._cdr_bytes(spec, msg))}
-        return message
-
-    def _cdr_bytes(self, spec: MessageSpec, msg: dict[str, Any]) -> int | None:
-        """The serialized size tracing reports for stamped messages (None: not needed)."""
-        if header_stamp_ns(msg) is None:
+        message = frame.message
+        if (frame.wire_bytes < self.state.config.offload_threshold_bytes
+                or not isinstance(message, dict) or message.get("op") != "publish"):
             return None
-        try:
-            return cdr_size(self.state.registry, spec.name, msg)
-        except (SchemaError, KeyError, TypeError, ValueError, AttributeError):
+        raw = message.get("msg")
+        if not isinstance(raw, dict) or payload_size(raw) * 2 >= frame.wire_bytes:
             return None
+        spec = self._presumed_spec(message)
+        if spec is None:
+            return None
+        return PublishCheck(spec, raw, frame.wire_bytes, now_ns, self.state.registry)
 
-    def _presumed_spec(self, message: dict[str, Any]) -> MessageSpec | None:
+    def _presumed_spec(self, message: JsonObject) -> MessageSpec | None:
         topic = message.get("topic")
         try:
             entry = self.state.graph.topics.get(absolute_name(topic)) if isinstance(
@@ -155,16 +135,24 @@ class BridgeCore:
             return None
 
     def receive_invalid(self, client_id: int, problem: str, now_ns: int) -> list[Effect]:
-        """A frame that did not decode (the edge decodes large frames in a worker)."""
+        """A frame that did not decode."""
         ctx = Context(self.state, now_ns)
         session = self.state.sessions.get(client_id)
         if session is not None:
             ctx.problem(session, "?", None, f"undecodable frame: {problem}")
         return ctx.effects
 
-    def receive_decoded(self, client_id: int, message: Any, now_ns: int) -> list[Effect]:
-        """Handle one decoded message (and any message its fragments complete)."""
-        ctx = Context(self.state, now_ns)
+    def receive_frame(self, client_id: int, frame: InboundFrame, now_ns: int) -> list[Effect]:
+        """Handle one decoded frame (and any message its fragments complete)."""
+        return self._receive(client_id, frame.message, frame, now_ns)
+
+    def receive_op(self, client_id: int, message: JsonObject, now_ns: int) -> list[Effect]:
+        """Handle an op of an in-process client (`connect(node=...)`): no frame, no wire."""
+        return self._receive(client_id, message, None, now_ns)
+
+    def _receive(self, client_id: int, message: JsonValue | RefusedFrame,
+                 frame: InboundFrame | None, now_ns: int) -> list[Effect]:
+        ctx = Context(self.state, now_ns, frame)
         session = self.state.sessions.get(client_id)
         if session is None or session.closing:
             return []
@@ -176,10 +164,13 @@ class BridgeCore:
             except SchemaError as exc:
                 ctx.problem(session, "fragment", None, f"reassembled text is not JSON: {exc}")
                 continue
+            if frame is not None:  # the message arrived with its last fragment
+                ctx.frame = InboundFrame(message, frame.arrived_ns, len(text))
             self._dispatch_guarded(ctx, session, message)
         return ctx.effects
 
-    def _dispatch_guarded(self, ctx: Context, session: ClientSession, message: Any) -> None:
+    def _dispatch_guarded(self, ctx: Context, session: ClientSession,
+                          message: JsonValue | RefusedFrame) -> None:
         """`_dispatch`, where a bug costs one op: never the connection (1011) or the server."""
         try:
             self._dispatch(ctx, session, message)
@@ -237,7 +228,7 @@ class BridgeCore:
         """Receive every message published in the graph from now on (e.g. a DDS mirror)."""
         self.state.sinks.append(sink)
 
-    def publish_external(self, node: str, topic: str, type_name: str, msg: dict[str, Any],
+    def publish_external(self, node: str, topic: str, type_name: str, msg: JsonObject,
                          now_ns: int, cdr: bytes | None = None,
                          latch: bool = False) -> list[Effect]:
         """Publish a message from a source outside the websocket clients (a DDS mirror, the

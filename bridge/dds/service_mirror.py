@@ -136,7 +136,7 @@ class ServiceMirror:
         return True
 
     def _send(self, client_id: int, op: JsonObject) -> None:
-        self._apply(self._core.receive_decoded(client_id, op, time.time_ns()))
+        self._apply(self._core.receive_op(client_id, op, time.time_ns()))
 
     def guids(self) -> tuple[list[bytes], list[bytes]]:
         """(reader GUIDs, writer GUIDs) of every service endpoint."""

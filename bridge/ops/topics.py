@@ -4,14 +4,14 @@ from __future__ import annotations
 
 from bridge.context import Context
 from bridge.errors import GraphConflictError, OpFailure
-from bridge.inbound import PreparedMessage
+from bridge.graph import TopicEntry
 from bridge.names import absolute_name, allowed
 from bridge.ops import Route, route
 from bridge.outgoing import MIN_FRAGMENT_SIZE, TopicMessage
 from bridge.session import ClientSession
 from bridge.subscription import SubscribeSettings, Subscription
+from bridge.validation import CheckedMessage, InvalidMessage, check_message
 from schemas.errors import SchemaError
-from schemas.message import normalize
 from schemas.ops import (
     Advertise,
     PublishFields,
@@ -20,6 +20,7 @@ from schemas.ops import (
     Unsubscribe,
     parse_publish,
 )
+from schemas.specs import MessageSpec
 
 
 def topic_name(ctx: Context, raw: str) -> str:
@@ -67,11 +68,25 @@ def handle_unadvertise(ctx: Context, session: ClientSession, op: Unadvertise) ->
 
 def handle_publish(ctx: Context, session: ClientSession, op: PublishFields) -> None:
     name = topic_name(ctx, op.topic)
+    entry, type_name = publishing_entry(ctx, session, name, op)
+    checked = checked_message(ctx, ctx.state.registry.message(type_name), op)
+    if isinstance(checked, InvalidMessage):
+        raise OpFailure(f"message dropped: {checked.problem}")
+    message = TopicMessage(name, checked.spec.name, checked.msg, ctx.now_ns,
+                           ctx.state.registry, size_hint=checked.size_hint,
+                           cdr_bytes=checked.cdr_bytes)
+    if session.node in entry.latching:
+        entry.latched = message
+    ctx.publish(message, session.node)
+
+
+def publishing_entry(ctx: Context, session: ClientSession, name: str,
+                     op: PublishFields) -> tuple[TopicEntry, str]:
+    """The topic `op` publishes on and its type, with the client among its publishers."""
     graph = ctx.state.graph
-    entry = graph.topics.get(name)
     if op.type is not None:
         declare(ctx, name, message_type(ctx, op.type))
-        entry = graph.topics[name]
+    entry = graph.topics.get(name)
     if entry is None or entry.type_name is None:
         raise OpFailure(f"Cannot infer topic type for topic {name} as it is not yet advertised")
     if session.node not in entry.publishers:
@@ -79,21 +94,17 @@ def handle_publish(ctx: Context, session: ClientSession, op: PublishFields) -> N
         session.published.add(name)
     elif op.latch:
         entry.latching.add(session.node)
-    spec = ctx.state.registry.message(entry.type_name)
-    prepared = op.msg if isinstance(op.msg, PreparedMessage) and op.msg.spec is spec else None
-    if prepared is not None:
-        message = TopicMessage(name, entry.type_name, dict(prepared), ctx.now_ns,
-                               ctx.state.registry, size_hint=prepared.size_hint,
-                               cdr_bytes=prepared.cdr_bytes)
-    else:
-        try:
-            msg = normalize(spec, op.msg, now_ns=ctx.now_ns)
-        except SchemaError as exc:
-            raise OpFailure(f"message dropped: {exc}") from exc
-        message = TopicMessage(name, entry.type_name, msg, ctx.now_ns, ctx.state.registry)
-    if session.node in entry.latching:
-        entry.latched = message
-    ctx.publish(message, session.node)
+    return entry, entry.type_name
+
+
+def checked_message(ctx: Context, spec: MessageSpec, op: PublishFields) -> CheckedMessage:
+    """The message of `op` checked against `spec`: the check its frame brought from a worker
+    (`BridgeCore.offload`) if it was against this very type, else one made now."""
+    frame = ctx.frame
+    if frame is not None and frame.checked is not None and frame.checked.spec is spec:
+        return frame.checked
+    return check_message(spec, op.msg, wire_bytes=frame.wire_bytes if frame else 0,
+                         now_ns=ctx.now_ns)
 
 
 def subscribe_settings(op: Subscribe) -> SubscribeSettings:
