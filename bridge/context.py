@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import logging
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING
 
 from bridge.config import BridgeConfig
-from bridge.effects import Close, Effect, Schedule, Send
+from bridge.effects import Close, DeadlineKey, Effect, Schedule, Send
 from bridge.graph import Graph
 from bridge.outgoing import ControlMessage, Delivery, TopicMessage
 from bridge.session import ClientSession, StatusLevel
@@ -15,6 +15,11 @@ from bridge.sinks import LocalFanout, MessageSink
 from bridge.subscription import Release, Subscription
 from schemas.registry import TypeRegistry
 from schemas.safety import echo, safe_text
+from schemas.values import JsonObject, OpId
+
+if TYPE_CHECKING:
+    from bridge.inbound import InboundFrame
+    from bridge.rosapi.common import RosapiService
 
 logger = logging.getLogger("bridge.core")
 
@@ -26,7 +31,7 @@ class PendingCall:
     service: str
     provider: int
     caller: int
-    caller_id: Any
+    caller_id: OpId
     caller_service: str
     timeout_s: float
 
@@ -38,7 +43,7 @@ class PendingGoal:
     action: str
     provider: int
     caller: int
-    caller_id: Any
+    caller_id: OpId
     caller_action: str
     feedback: bool
 
@@ -59,7 +64,7 @@ class BridgeState:
         # Nodes another middleware knows (a DDS domain's ROS 2 nodes), for rosapi's listings.
         self.external_nodes: set[str] = set()
         # Services the bridge answers itself, name -> RosapiService (set by the core).
-        self.rosapi: dict[str, Any] = {}
+        self.rosapi: dict[str, RosapiService] = {}
         self.clients_ever = 0
 
     def session_of_node(self, node: str) -> ClientSession | None:
@@ -67,16 +72,20 @@ class BridgeState:
 
 
 class Context:
-    """One core call: the state, the time it happens at, and the effects produced."""
+    """One core call: the state, the time it happens at, the client's frame it handles (None
+    for a call that handles none: a deadline, an in-process source) and the effects produced.
+    """
 
-    def __init__(self, state: BridgeState, now_ns: int) -> None:
+    def __init__(self, state: BridgeState, now_ns: int,
+                 frame: InboundFrame | None = None) -> None:
         self.state = state
         self.now_ns = now_ns
+        self.frame = frame
         self.effects: list[Effect] = []
         # Texts of completed fragment lists, fed back to the core as inbound messages.
         self.reassembled: list[str] = []
 
-    def send(self, client_id: int, payload: dict[str, Any]) -> None:
+    def send(self, client_id: int, payload: JsonObject) -> None:
         """Queue a JSON op for a client; it will never be dropped from the send queue."""
         session = self.state.sessions.get(client_id)
         if session is not None:
@@ -111,13 +120,13 @@ class Context:
             self.schedule(("problems", session.client_id), deadline)
         return full
 
-    def schedule(self, key: object, at_ns: int) -> None:
+    def schedule(self, key: DeadlineKey, at_ns: int) -> None:
         self.effects.append(Schedule(key, at_ns))
 
     def close(self, client_id: int, code: int, reason: str) -> None:
         self.effects.append(Close(client_id, code, reason))
 
-    def problem(self, session: ClientSession, op: Any, op_id: Any, text: str,
+    def problem(self, session: ClientSession, op: str, op_id: OpId, text: str,
                 level: StatusLevel = StatusLevel.ERROR, exc_info: BaseException | None = None,
                 ) -> None:
         """Log one short line naming client, op, id and problem (rate-limited per client,
@@ -127,10 +136,10 @@ class Context:
             log_level = {StatusLevel.INFO: logging.INFO,
                          StatusLevel.WARNING: logging.WARNING}.get(level, logging.ERROR)
             shown_id = safe_text(op_id, 80) if isinstance(op_id, str) else echo(op_id, 80)
-            logger.log(log_level, "[%s] op=%s id=%s: %s", session.node, safe_text(str(op), 60),
+            logger.log(log_level, "[%s] op=%s id=%s: %s", session.node, safe_text(op, 60),
                        shown_id, text, exc_info=exc_info)
         if level >= session.status_level and session.status_level != StatusLevel.NONE:
-            status: dict[str, Any] = {"op": "status", "level": level.name.lower(), "msg": text}
+            status: JsonObject = {"op": "status", "level": level.name.lower(), "msg": text}
             if op_id is not None:
                 status["id"] = op_id
             self.send(session.client_id, status)

@@ -9,43 +9,32 @@ from __future__ import annotations
 
 import contextlib
 import logging
-from collections.abc import Callable, Hashable
-from typing import Any
+from collections.abc import Callable
 
 from bridge.config import BridgeConfig
 from bridge.context import BridgeState, Context, log_problem_summary
-from bridge.effects import Effect
+from bridge.effects import DeadlineKey, Effect
 from bridge.errors import BridgeError, InvalidNameError
-from bridge.inbound import PreparedMessage, RefusedFrame, decode_frame
+from bridge.inbound import InboundFrame, RefusedFrame, decode_frame, read_frame
 from bridge.names import absolute_name
-from bridge.ops import (
-    Handler,
-    actions,
-    auth,
-    fragments,
-    levels,
-    merge_tables,
-    services,
-    topics,
-)
+from bridge.ops import OpRoute, actions, auth, fragments, levels, merge_routes, services, topics
 from bridge.outgoing import MIN_FRAGMENT_SIZE, TopicMessage, payload_size
 from bridge.rosapi import ROSAPI_SERVICES
 from bridge.session import ClientSession
 from bridge.sinks import MessageSink
-from schemas.codec_cdr import cdr_size
+from bridge.validation import PublishCheck
 from schemas.errors import SchemaError
 from schemas.message import normalize
-from schemas.ops import MAX_NAME_CHARS, OpError, parse_op, parse_publish, reply_id
+from schemas.ops import MAX_NAME_CHARS, OpError, reply_id
 from schemas.registry import TypeRegistry
 from schemas.safety import echo, safe_text
 from schemas.specs import MessageSpec
-from schemas.tracing import header_stamp_ns
+from schemas.values import JsonObject, JsonValue, OpId
 
 logger = logging.getLogger("bridge.core")
 
-OP_HANDLERS: dict[str, Handler] = merge_tables(
-    topics.HANDLERS, services.HANDLERS, actions.HANDLERS, fragments.HANDLERS, levels.HANDLERS,
-    auth.HANDLERS)
+OP_ROUTES: dict[str, OpRoute] = merge_routes(
+    topics.ROUTES, services.ROUTES, actions.ROUTES, fragments.ROUTES, levels.ROUTES, auth.ROUTES)
 
 # Deadline keys are tuples whose first item selects the handler; the rest are its arguments.
 DEADLINE_HANDLERS: dict[str, Callable[..., None]] = {
@@ -101,56 +90,38 @@ class BridgeCore:
 
     # -- inbound -----------------------------------------------------------------------------
 
-    def receive(self, client_id: int, data: bytes | str, now_ns: int) -> list[Effect]:
-        """Handle one websocket frame (text = JSON, binary = CBOR or JSON)."""
+    def receive(self, client_id: int, data: bytes | str, arrived_ns: int,
+                now_ns: int) -> list[Effect]:
+        """Decode and handle one websocket frame (text = JSON, binary = CBOR or JSON) that was
+        read at `arrived_ns`. The edge splits this up: `read_frame`, `offload`, `receive_frame`.
+        """
         try:
-            decoded = decode_frame(data)
+            frame = read_frame(data, arrived_ns)
         except SchemaError as exc:
             return self.receive_invalid(client_id, str(exc), now_ns)
-        return self.receive_decoded(client_id, decoded, now_ns)
+        return self.receive_frame(client_id, frame, now_ns)
 
-    def prepare(self, data: bytes | str, now_ns: int) -> Any:
-        """Decode a frame and pre-validate a publish's message (`prepare_decoded`)."""
-        return self.prepare_decoded(decode_frame(data), len(data), now_ns)
+    def offload(self, frame: InboundFrame, now_ns: int) -> PublishCheck | None:
+        """The work `frame` needs off the event loop, or None to handle it at once.
 
-    def needs_worker(self, message: Any, wire_bytes: int) -> bool:
-        """Is validating this decoded frame worth a worker thread? Yes for a publish whose
-        message is not mostly bytes and arrays: its validation runs in Python (nested messages)
-        or outside the GIL (base64), while bulk bytes and arrays cost microseconds."""
-        if not isinstance(message, dict) or message.get("op") != "publish":
-            return False
-        msg = message.get("msg")
-        return isinstance(msg, dict) and payload_size(msg) * 2 < wire_bytes
-
-    def prepare_decoded(self, message: Any, wire_bytes: int, now_ns: int) -> Any:
-        """Pre-validate a decoded publish's message; meant for a worker thread.
-
-        Everything a large publish costs in proportion to its size happens here, off the event
-        loop: base64 decode of byte arrays, validation of every nested message, the size
-        figures. It only reads the graph (the topic's type); the handler takes the
-        `PreparedMessage` as it is when the type is unchanged. Hand the result to
-        `receive_decoded`; a message that does not validate is left for the handler to refuse.
+        A publish of at least `offload_threshold_bytes` whose message is not mostly bytes and
+        arrays: checking it runs in Python (nested messages) or outside the GIL (base64),
+        while bulk bytes and arrays cost microseconds. The check reads the topic's type now;
+        hand its result back as `frame.checked` to `receive_frame`.
         """
-        if isinstance(message, dict) and message.get("op") == "publish":
-            spec = self._presumed_spec(message)
-            if spec is not None and isinstance(message.get("msg"), dict):
-                with contextlib.suppress(SchemaError):
-                    msg = normalize(spec, message["msg"], now_ns=now_ns)
-                    message = {**message, "msg": PreparedMessage(
-                        msg, spec, max(wire_bytes, payload_size(msg)),
-                        self._cdr_bytes(spec, msg))}
-        return message
-
-    def _cdr_bytes(self, spec: MessageSpec, msg: dict[str, Any]) -> int | None:
-        """The serialized size tracing reports for stamped messages (None: not needed)."""
-        if header_stamp_ns(msg) is None:
+        message = frame.message
+        if (frame.wire_bytes < self.state.config.offload_threshold_bytes
+                or not isinstance(message, dict) or message.get("op") != "publish"):
             return None
-        try:
-            return cdr_size(self.state.registry, spec.name, msg)
-        except (SchemaError, KeyError, TypeError, ValueError, AttributeError):
+        raw = message.get("msg")
+        if not isinstance(raw, dict) or payload_size(raw) * 2 >= frame.wire_bytes:
             return None
+        spec = self._presumed_spec(message)
+        if spec is None:
+            return None
+        return PublishCheck(spec, raw, frame.wire_bytes, now_ns, self.state.registry)
 
-    def _presumed_spec(self, message: dict[str, Any]) -> MessageSpec | None:
+    def _presumed_spec(self, message: JsonObject) -> MessageSpec | None:
         topic = message.get("topic")
         try:
             entry = self.state.graph.topics.get(absolute_name(topic)) if isinstance(
@@ -164,16 +135,24 @@ class BridgeCore:
             return None
 
     def receive_invalid(self, client_id: int, problem: str, now_ns: int) -> list[Effect]:
-        """A frame that did not decode (the edge decodes large frames in a worker)."""
+        """A frame that did not decode."""
         ctx = Context(self.state, now_ns)
         session = self.state.sessions.get(client_id)
         if session is not None:
             ctx.problem(session, "?", None, f"undecodable frame: {problem}")
         return ctx.effects
 
-    def receive_decoded(self, client_id: int, message: Any, now_ns: int) -> list[Effect]:
-        """Handle one decoded message (and any message its fragments complete)."""
-        ctx = Context(self.state, now_ns)
+    def receive_frame(self, client_id: int, frame: InboundFrame, now_ns: int) -> list[Effect]:
+        """Handle one decoded frame (and any message its fragments complete)."""
+        return self._receive(client_id, frame.message, frame, now_ns)
+
+    def receive_op(self, client_id: int, message: JsonObject, now_ns: int) -> list[Effect]:
+        """Handle an op of an in-process client (`connect(node=...)`): no frame, no wire."""
+        return self._receive(client_id, message, None, now_ns)
+
+    def _receive(self, client_id: int, message: JsonValue | RefusedFrame,
+                 frame: InboundFrame | None, now_ns: int) -> list[Effect]:
+        ctx = Context(self.state, now_ns, frame)
         session = self.state.sessions.get(client_id)
         if session is None or session.closing:
             return []
@@ -185,22 +164,26 @@ class BridgeCore:
             except SchemaError as exc:
                 ctx.problem(session, "fragment", None, f"reassembled text is not JSON: {exc}")
                 continue
+            if frame is not None:  # the message arrived with its last fragment
+                ctx.frame = InboundFrame(message, frame.arrived_ns, len(text))
             self._dispatch_guarded(ctx, session, message)
         return ctx.effects
 
-    def _dispatch_guarded(self, ctx: Context, session: ClientSession, message: Any) -> None:
+    def _dispatch_guarded(self, ctx: Context, session: ClientSession,
+                          message: JsonValue | RefusedFrame) -> None:
         """`_dispatch`, where a bug costs one op: never the connection (1011) or the server."""
         try:
             self._dispatch(ctx, session, message)
         except Exception as exc:
             head = message if isinstance(message, dict) else {}
-            ctx.problem(session, head.get("op", "?"), reply_id(head.get("id")),
+            ctx.problem(session, str(head.get("op", "?")), reply_id(head.get("id")),
                         f"internal error: {echo(exc)}", exc_info=exc)
             with contextlib.suppress(Exception):
                 answer_failed_request(ctx, session, head, f"internal error: {echo(exc)}",
                                       log=False)
 
-    def _dispatch(self, ctx: Context, session: ClientSession, message: Any) -> None:
+    def _dispatch(self, ctx: Context, session: ClientSession,
+                  message: JsonValue | RefusedFrame) -> None:
         if isinstance(message, RefusedFrame):
             answer_failed_request(ctx, session, message.head, message.problem)
             return
@@ -209,35 +192,34 @@ class BridgeCore:
                         f"message must be a JSON object, got {type(message).__name__}")
             return
         op_name, op_id = message.get("op"), reply_id(message.get("id"))
+        shown_op = safe_text(str(op_name), 60) if op_name is not None else "?"
         if "fragment_size" in message:
-            set_fragment_size(ctx, session, message["fragment_size"], op_name, op_id)
-        if not isinstance(op_name, str) or op_name not in OP_HANDLERS:
+            set_fragment_size(ctx, session, message["fragment_size"], shown_op, op_id)
+        route = OP_ROUTES.get(op_name) if isinstance(op_name, str) else None
+        if route is None:
             what = ("message without an op" if op_name is None
-                    else f"Unknown operation: {safe_text(str(op_name), 60)}")
-            ctx.problem(session, op_name, op_id, what)
+                    else f"Unknown operation: {shown_op}")
+            ctx.problem(session, shown_op, op_id, what)
             return
-        if not session.authenticated and op_name != "auth":
+        if not session.authenticated and route.op != "auth":
             answer_failed_request(ctx, session, message, "not authenticated: this bridge needs "
                                   "a valid auth op (rosauth) before any other")
             return
-        handler = OP_HANDLERS[op_name]
         try:
-            op = parse_publish(message) if op_name == "publish" else parse_op(message)
-        except OpError as exc:
+            route.run(ctx, session, message)
+        except OpError as exc:  # the op did not parse: nothing was handled
             answer_failed_request(ctx, session, message, f"malformed op: {exc}")
-            return
-        try:
-            handler(ctx, session, op)
         except (BridgeError, SchemaError) as exc:
-            ctx.problem(session, op_name, op_id, str(exc))
+            ctx.problem(session, route.op, op_id, str(exc))
 
     # -- time --------------------------------------------------------------------------------
 
-    def on_deadline(self, key: Hashable, now_ns: int) -> list[Effect]:
+    def on_deadline(self, key: DeadlineKey, now_ns: int) -> list[Effect]:
         """A deadline scheduled with `Schedule(key, at_ns)` has come."""
         ctx = Context(self.state, now_ns)
-        if isinstance(key, tuple) and key and key[0] in DEADLINE_HANDLERS:
-            DEADLINE_HANDLERS[key[0]](ctx, *key[1:])
+        handler = DEADLINE_HANDLERS.get(key[0]) if key and isinstance(key[0], str) else None
+        if handler is not None:
+            handler(ctx, *key[1:])
         return ctx.effects
 
     # -- the middleware seam -----------------------------------------------------------------
@@ -246,7 +228,7 @@ class BridgeCore:
         """Receive every message published in the graph from now on (e.g. a DDS mirror)."""
         self.state.sinks.append(sink)
 
-    def publish_external(self, node: str, topic: str, type_name: str, msg: dict[str, Any],
+    def publish_external(self, node: str, topic: str, type_name: str, msg: JsonObject,
                          now_ns: int, cdr: bytes | None = None,
                          latch: bool = False) -> list[Effect]:
         """Publish a message from a source outside the websocket clients (a DDS mirror, the
@@ -269,8 +251,8 @@ class BridgeCore:
         return ctx.effects
 
 
-def set_fragment_size(ctx: Context, session: ClientSession, value: Any, op_name: Any,
-                      op_id: Any) -> None:
+def set_fragment_size(ctx: Context, session: ClientSession, value: JsonValue, op_name: str,
+                      op_id: OpId) -> None:
     """Any message carrying `fragment_size` sets the client-wide size (protocol §1.2)."""
     if value is None:
         session.fragment_size = None
@@ -281,7 +263,7 @@ def set_fragment_size(ctx: Context, session: ClientSession, value: Any, op_name:
                     f"fragment_size must be a positive integer or null, got {echo(value, 60)}")
 
 
-def answer_failed_request(ctx: Context, session: ClientSession, message: dict[str, Any],
+def answer_failed_request(ctx: Context, session: ClientSession, message: JsonObject,
                           problem: str, log: bool = True) -> None:
     """Log an op that could not be handled; a caller waiting for an answer still gets one.
 
@@ -293,7 +275,8 @@ def answer_failed_request(ctx: Context, session: ClientSession, message: dict[st
     op_name, op_id = message.get("op"), reply_id(message.get("id"))
     problem = safe_text(problem)
     if log:
-        ctx.problem(session, op_name if op_name is not None else "?", op_id, problem)
+        ctx.problem(session, safe_text(str(op_name), 60) if op_name is not None else "?", op_id,
+                    problem)
     service, action = message.get("service"), message.get("action")
     if op_name == "call_service" and isinstance(service, str):
         services.respond(ctx, session.client_id, service[:MAX_NAME_CHARS], op_id, problem,

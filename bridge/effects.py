@@ -6,10 +6,12 @@ the asyncio edge (`bridge.server`) carries them out in order.
 
 from __future__ import annotations
 
-from collections.abc import Hashable
 from dataclasses import dataclass
 
 from bridge.outgoing import Outgoing
+
+#: What a deadline is for: its kind (`"call"`, `"fragment"`, ...) then the kind's arguments.
+DeadlineKey = tuple[str | int, ...]
 
 
 @dataclass(frozen=True, slots=True)
@@ -44,7 +46,7 @@ class Schedule:
     Scheduling a key that is already pending replaces the earlier deadline.
     """
 
-    key: Hashable
+    key: DeadlineKey
     at_ns: int
 
 

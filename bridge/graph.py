@@ -11,6 +11,7 @@ from dataclasses import dataclass, field
 
 from bridge.errors import GraphConflictError
 from bridge.outgoing import TopicMessage
+from schemas.values import JsonObject, OpId
 
 BRIDGE_NODE = "/rosbridge_websocket"
 ROSAPI_NODE = "/rosapi"
@@ -24,12 +25,12 @@ class TopicEntry:
 
     name: str
     type_name: str | None = None
-    publishers: dict[str, set[object]] = field(default_factory=dict)
+    publishers: dict[str, set[OpId]] = field(default_factory=dict)
     subscribers: set[str] = field(default_factory=set)
     latching: set[str] = field(default_factory=set)
     latched: TopicMessage | None = None
     # The `qos` object each publishing node advertised with (a DDS mirror's writer QoS).
-    qos: dict[str, dict] = field(default_factory=dict)
+    qos: dict[str, JsonObject] = field(default_factory=dict)
 
     def is_unused(self) -> bool:
         return not self.publishers and not self.subscribers
@@ -92,14 +93,14 @@ class Graph:
                 f"established with type {entry.type_name}")
         return entry
 
-    def add_publisher(self, name: str, node: str, advert_id: object, latch: bool) -> TopicEntry:
+    def add_publisher(self, name: str, node: str, advert_id: OpId, latch: bool) -> TopicEntry:
         entry = self.topic(name)
         entry.publishers.setdefault(node, set()).add(advert_id)
         if latch:
             entry.latching.add(node)
         return entry
 
-    def remove_publisher(self, name: str, node: str, advert_id: object = None,
+    def remove_publisher(self, name: str, node: str, advert_id: OpId = None,
                          every_id: bool = True) -> None:
         """Drop one advertisement id (or all of the node's) and forget the topic if unused."""
         entry = self.topics.get(name)

@@ -1,34 +1,15 @@
-"""Inbound frame decoding, kept pure so the edge may run it in a worker thread."""
+"""Inbound frames: decoding, kept pure, and what the edge measured when it read them."""
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
 
+from bridge.validation import CheckedMessage
 from schemas import codec_cbor, codec_json
 from schemas.errors import DecodeError
 from schemas.ops import MAX_NAME_CHARS, reply_id
 from schemas.safety import describe_value, frame_problem
-from schemas.specs import MessageSpec
-
-
-class PreparedMessage(dict):
-    """A publish's message already normalized against `spec` on a worker thread, with the
-    figures the loop would otherwise derive from it: the work a big nested message costs (400
-    radar detections: ~6 ms on a busy core) must not run on the event loop twice.
-
-    A dict, so the op model takes it like any message; `handle_publish` unwraps it when the
-    topic's type is still `spec`, and normalizes it again otherwise.
-    """
-
-    __slots__ = ("cdr_bytes", "size_hint", "spec")
-
-    def __init__(self, msg: dict[str, Any], spec: MessageSpec, size_hint: int,
-                 cdr_bytes: int | None) -> None:
-        super().__init__(msg)
-        self.spec = spec
-        self.size_hint = size_hint
-        self.cdr_bytes = cdr_bytes
+from schemas.values import JsonObject, JsonValue
 
 
 @dataclass(frozen=True)
@@ -38,14 +19,35 @@ class RefusedFrame:
     (`op`, `id`, `service`, `action`) so a caller waiting on it still gets its answer."""
 
     problem: str
-    head: dict[str, Any] = field(default_factory=dict)
+    head: JsonObject = field(default_factory=dict)
+
+
+@dataclass(frozen=True, slots=True)
+class InboundFrame:
+    """One decoded frame of a client, with the facts the edge measured when it read it.
+
+    `arrived_ns` is the wall clock when the frame was read from the socket and `wire_bytes`
+    its websocket payload size (the tracer's `bridge_in` span and byte counters). `checked` is
+    a publish's message already checked against its type off the event loop
+    (`BridgeCore.offload`); the publish handler takes it instead of checking again.
+    """
+
+    message: JsonValue | RefusedFrame
+    arrived_ns: int
+    wire_bytes: int
+    checked: CheckedMessage | None = None
+
+
+def read_frame(data: bytes | str, arrived_ns: int) -> InboundFrame:
+    """`decode_frame` of a frame read at `arrived_ns`; raises DecodeError like it."""
+    return InboundFrame(decode_frame(data), arrived_ns, len(data))
 
 
 _JSON_STARTS = (b"{", b"[", b'"')
 _HEAD_KEYS = ("op", "service", "action")
 
 
-def decode_frame(data: bytes | str) -> Any:
+def decode_frame(data: bytes | str) -> JsonValue | RefusedFrame:
     """Text frames are JSON; binary frames are CBOR, or UTF-8 JSON as ROS# sends them.
 
     A binary frame that begins (after whitespace) like a JSON document is read as JSON first:
@@ -63,7 +65,7 @@ def decode_frame(data: bytes | str) -> Any:
     return message if problem is None else RefusedFrame(problem, _head(message))
 
 
-def _decode(data: bytes | str) -> tuple[Any, bool]:
+def _decode(data: bytes | str) -> tuple[JsonValue, bool]:
     """The decoded frame, and whether orjson's strict JSON parser read it."""
     if isinstance(data, str) or bytes(data[:64]).lstrip()[:1] in _JSON_STARTS:
         return codec_json.loads_strictness(data)
@@ -76,11 +78,11 @@ def _decode(data: bytes | str) -> tuple[Any, bool]:
             raise DecodeError(f"binary frame is neither CBOR nor JSON ({cbor_error})") from None
 
 
-def _head(message: Any) -> dict[str, Any]:
+def _head(message: JsonValue) -> JsonObject:
     """The routing fields of a refused frame that are safe to use and echo."""
     if not isinstance(message, dict):
         return {}
-    head = {}
+    head: JsonObject = {}
     for key in _HEAD_KEYS:
         value = message.get(key)
         if isinstance(value, str) and len(value) <= MAX_NAME_CHARS and describe_value(

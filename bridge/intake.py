@@ -3,8 +3,9 @@
 Every frame is decoded on the event loop: the JSON and CBOR parsers are C code that holds the
 GIL, so a worker thread would stall the loop just as long and add a thread hop on top. What a
 worker does win is validation that runs in Python or outside the GIL: a publish of at least
-`offload_bytes` whose message is not mostly bytes or arrays (a JSON scan's base64, 400 nested
-radar detections) is validated on a worker (`BridgeCore.needs_worker`, `prepare_decoded`).
+`offload_threshold_bytes` whose message is not mostly bytes or arrays (a JSON scan's base64,
+400 nested radar detections) is checked on a worker (`BridgeCore.offload`), and the frame goes
+to the core with the result (`InboundFrame.checked`).
 
 Meanwhile later frames of the same connection keep coming, and a later frame waits for the
 one on the worker only if it has to: when both publish on the same topic (ROS keeps a topic's
@@ -20,28 +21,28 @@ import time
 from collections import deque
 from collections.abc import Callable
 from concurrent.futures import Executor
-from dataclasses import dataclass, field
-from typing import Any
+from dataclasses import dataclass, replace
 
 from bridge.core import BridgeCore
 from bridge.effects import Effect
-from bridge.inbound import decode_frame
+from bridge.inbound import InboundFrame, read_frame
+from bridge.validation import CheckedMessage, PublishCheck
 from schemas.errors import SchemaError
+from schemas.values import JsonValue
 
 # The key of a frame that keeps its place relative to every other frame of its connection.
 BARRIER = None
-_PENDING = object()
 
 
-def topic_key(topic: Any) -> str | None:
+def topic_key(topic: JsonValue) -> str | None:
     """The key ordering a publish on `topic` (its absolute name), BARRIER if not a name."""
     if not isinstance(topic, str):
         return BARRIER
-    topic = topic.strip()
-    return topic if topic.startswith("/") else "/" + topic
+    name = topic.strip()
+    return name if name.startswith("/") else "/" + name
 
 
-def message_key(message: Any) -> str | None:
+def message_key(message: JsonValue) -> str | None:
     """A decoded frame's ordering key: the topic of a publish, else BARRIER."""
     if isinstance(message, dict) and message.get("op") == "publish":
         return topic_key(message.get("topic"))
@@ -50,31 +51,23 @@ def message_key(message: Any) -> str | None:
 
 @dataclass(slots=True)
 class Entry:
-    """A frame waiting for its turn: decoded (`message`) or still on the worker."""
+    """A frame waiting for its turn: `ready` once its check on the worker has ended."""
 
     key: str | None
-    arrived_ns: int
-    wire_bytes: int
-    message: Any = field(default=_PENDING)
-    problem: str | None = None
-
-    @property
-    def ready(self) -> bool:
-        return self.message is not _PENDING or self.problem is not None
+    frame: InboundFrame
+    ready: bool = True
+    problem: str | None = None  # the worker failed (a bug): the frame is refused with this
 
 
 class Intake:
     """The inbound pipeline of one connection; `apply` carries out the core's effects."""
 
-    def __init__(self, client_id: int, core: BridgeCore, pool: Executor, offload_bytes: int,
-                 apply: Callable[[list[Effect]], None],
-                 arrived: Callable[[int, int], None]) -> None:
+    def __init__(self, client_id: int, core: BridgeCore, pool: Executor,
+                 apply: Callable[[list[Effect]], None]) -> None:
         self._client_id = client_id
         self._core = core
         self._pool = pool
-        self._offload_bytes = offload_bytes
         self._apply = apply
-        self._arrived = arrived  # tells the tracer which frame the core handles next
         self._waiting: deque[Entry] = deque()
         self._moved = asyncio.Event()  # set whenever waiting frames were handled
         self.pending_bytes = 0  # wire bytes of the frames taken but not handled
@@ -82,7 +75,7 @@ class Intake:
 
     @property
     def in_flight(self) -> int:
-        """Frames taken but not yet handled (decoding on a worker, or waiting behind one)."""
+        """Frames taken but not yet handled (checked on a worker, or waiting behind one)."""
         return len(self._waiting)
 
     async def settled(self, frames: int, nbytes: int) -> None:
@@ -92,46 +85,46 @@ class Intake:
             await self._moved.wait()
 
     def take(self, data: bytes | str, arrived_ns: int) -> None:
-        """Handle a frame now, or start its validation and handle it when its turn comes."""
+        """Handle a frame now, or start its check and handle it when its turn comes."""
         try:
-            message = decode_frame(data)
+            frame = read_frame(data, arrived_ns)
         except SchemaError as exc:
             self._apply(self._core.receive_invalid(self._client_id, str(exc), time.time_ns()))
             return
-        key = message_key(message)
-        wire_bytes = len(data)
-        if wire_bytes >= self._offload_bytes and self._core.needs_worker(message, wire_bytes):
-            self._start_worker(key, message, arrived_ns, wire_bytes)
+        key = message_key(frame.message)
+        work = self._core.offload(frame, arrived_ns)  # the check's 'now': the frame's arrival
+        if work is not None:
+            self._start_worker(Entry(key, frame, ready=False), work)
         elif self._waiting and self._must_wait(key, self._waiting):
-            self._waiting.append(Entry(key, arrived_ns, wire_bytes, message))
-            self.pending_bytes += wire_bytes
+            self._wait(Entry(key, frame))
         else:
-            self._handle(message, arrived_ns, wire_bytes)
+            self._handle(frame)
 
-    def _start_worker(self, key: str | None, message: Any, arrived_ns: int,
-                      wire_bytes: int) -> None:
+    def _wait(self, entry: Entry) -> None:
+        self._waiting.append(entry)
+        self.pending_bytes += entry.frame.wire_bytes
+
+    def _start_worker(self, entry: Entry, work: PublishCheck) -> None:
         try:
-            future = asyncio.get_running_loop().run_in_executor(
-                self._pool, self._core.prepare_decoded, message, wire_bytes, time.time_ns())
+            future = asyncio.get_running_loop().run_in_executor(self._pool, work.run)
         except RuntimeError:  # the pool has shut down: the server is stopping
             self.closed = True
             return
-        entry = Entry(key, arrived_ns, wire_bytes)
-        self._waiting.append(entry)
-        self.pending_bytes += wire_bytes
-        future.add_done_callback(lambda done: self._prepared(entry, done))
+        self._wait(entry)
+        future.add_done_callback(lambda done: self._checked(entry, done))
 
-    def _prepared(self, entry: Entry, done: asyncio.Future[Any]) -> None:
+    def _checked(self, entry: Entry, done: asyncio.Future[CheckedMessage]) -> None:
         if done.cancelled():  # the server is stopping
             self.closed = True
         elif (exc := done.exception()) is not None:
-            entry.problem = str(exc) if isinstance(exc, SchemaError) else repr(exc)
+            entry.problem = repr(exc)
         else:
-            entry.message = done.result()
+            entry.frame = replace(entry.frame, checked=done.result())
+        entry.ready = True
         self.run_ready()
 
     def run_ready(self) -> None:
-        """Handle every decoded frame that no earlier unhandled frame holds back."""
+        """Handle every frame that no earlier unhandled frame holds back."""
         held: deque[Entry] = deque()
         while self._waiting:
             entry = self._waiting.popleft()
@@ -140,12 +133,12 @@ class Intake:
             if not entry.ready or (held and self._must_wait(entry.key, held)):
                 held.append(entry)
                 continue
-            self.pending_bytes -= entry.wire_bytes
+            self.pending_bytes -= entry.frame.wire_bytes
             if entry.problem is not None:
                 self._apply(self._core.receive_invalid(self._client_id, entry.problem,
                                                        time.time_ns()))
             else:
-                self._handle(entry.message, entry.arrived_ns, entry.wire_bytes)
+                self._handle(entry.frame)
         self._waiting = held
         self._moved.set()
 
@@ -155,6 +148,5 @@ class Intake:
             return True
         return any(e.key is BARRIER or e.key == key for e in earlier)
 
-    def _handle(self, message: Any, arrived_ns: int, wire_bytes: int) -> None:
-        self._arrived(arrived_ns, wire_bytes)
-        self._apply(self._core.receive_decoded(self._client_id, message, time.time_ns()))
+    def _handle(self, frame: InboundFrame) -> None:
+        self._apply(self._core.receive_frame(self._client_id, frame, time.time_ns()))

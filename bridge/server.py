@@ -15,7 +15,7 @@ import asyncio
 import contextlib
 import logging
 import time
-from collections.abc import AsyncIterator, Callable, Hashable
+from collections.abc import AsyncIterator, Callable
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from typing import Any
@@ -27,7 +27,7 @@ from websockets.http11 import Request, Response
 from bridge.access import HandshakePolicy, scheme, tls_context
 from bridge.config import BridgeConfig
 from bridge.core import BridgeCore
-from bridge.effects import Close, Effect, Schedule, Send
+from bridge.effects import Close, DeadlineKey, Effect, Schedule, Send
 from bridge.http import HttpRoutes
 from bridge.intake import Intake
 from bridge.link import WRITE_HIGH_WATER, ClientLink
@@ -61,7 +61,7 @@ class BridgeServer:
         self.config = config
         self.core = core
         self.links: dict[int, ClientLink] = {}
-        self._timers: dict[Hashable, asyncio.TimerHandle] = {}
+        self._timers: dict[DeadlineKey, asyncio.TimerHandle] = {}
         self._pool = ThreadPoolExecutor(ENCODE_WORKERS, thread_name_prefix="bridge-encode")
         self._server: Server | None = None
         self._closing: set[asyncio.Task[None]] = set()
@@ -76,7 +76,8 @@ class BridgeServer:
     @property
     def port(self) -> int:
         assert self._server is not None, "server not started"
-        return self._server.sockets[0].getsockname()[1]
+        port: int = self._server.sockets[0].getsockname()[1]
+        return port
 
     async def start(self) -> None:
         self._server = await serve(
@@ -137,8 +138,7 @@ class BridgeServer:
         def apply(effects: list[Effect]) -> None:
             self.apply(effects, paced)
 
-        intake = Intake(client_id, self.core, self._pool, self.config.offload_threshold_bytes,
-                        apply, self.telemetry.tracer.frame_arrived)
+        intake = Intake(client_id, self.core, self._pool, apply)
         self.apply(self.telemetry.clients_changed())
         try:
             busy_s = 0.0  # time spent handling this client's frames since it last yielded
@@ -196,14 +196,14 @@ class BridgeServer:
                     self._closing.add(task)
                     task.add_done_callback(self._closing.discard)
 
-    def _schedule(self, key: Hashable, at_ns: int) -> None:
+    def _schedule(self, key: DeadlineKey, at_ns: int) -> None:
         previous = self._timers.pop(key, None)
         if previous is not None:
             previous.cancel()
         delay_s = max(0.0, (at_ns - time.time_ns()) / 1e9)
         self._timers[key] = asyncio.get_running_loop().call_later(delay_s, self._fire, key)
 
-    def _fire(self, key: Hashable) -> None:
+    def _fire(self, key: DeadlineKey) -> None:
         self._timers.pop(key, None)
         self.apply(self.core.on_deadline(key, time.time_ns()))
 

@@ -45,7 +45,7 @@ class ClientSession:
     published: set[str] = field(default_factory=set)
     services: set[str] = field(default_factory=set)
     actions: set[str] = field(default_factory=set)
-    fragments: dict[object, FragmentBuffer] = field(default_factory=dict)
+    fragments: dict[str | int, FragmentBuffer] = field(default_factory=dict)
     problems: ProblemLog = field(default_factory=ProblemLog)
     # False until a valid rosauth `auth` op when the bridge has an auth secret.
     authenticated: bool = True

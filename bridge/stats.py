@@ -113,7 +113,7 @@ class BridgeTelemetry:
             "client_names": [self.tracer.names.get(s.node, "") for s in sessions],
             "cpu_percent": self.cpu_percent,
             "rss_bytes": self._sampler.rss_bytes(),
-            "uptime_ns": time.time_ns() - self._started_ns,
+            "uptime_ns": ctx.now_ns - self._started_ns,
         }
 
     def metrics_page(self, connection: ServerConnection, request: Request) -> Response:

@@ -18,6 +18,7 @@ from collections import deque
 from dataclasses import dataclass
 
 from bridge.outgoing import COMPRESSION_RANK, JSON, TopicMessage
+from schemas.values import OpId
 
 NS_PER_MS = 1_000_000
 
@@ -62,18 +63,18 @@ class Subscription:
     def __init__(self, topic: str, spelling: str) -> None:
         self.topic = topic
         self.spelling = spelling
-        self.ids: dict[object, SubscribeSettings] = {}
+        self.ids: dict[OpId, SubscribeSettings] = {}
         self.settings = SubscribeSettings()
         self.dropped = 0
         self._last_sent_ns: int | None = None
         self._queue: deque[TopicMessage] = deque()
 
-    def set_id(self, sub_id: object, settings: SubscribeSettings) -> None:
+    def set_id(self, sub_id: OpId, settings: SubscribeSettings) -> None:
         """Add or overwrite one id's settings (re-subscribing an id replaces it)."""
         self.ids[sub_id] = settings
         self._recombine()
 
-    def remove_id(self, sub_id: object) -> None:
+    def remove_id(self, sub_id: OpId) -> None:
         """Forget one id; unknown ids are ignored (protocol §2.5)."""
         if self.ids.pop(sub_id, _MISSING) is not _MISSING and self.ids:
             self._recombine()

@@ -1,15 +1,15 @@
 """The bridge's stage recorder: `bridge_in` per publish, `fanout` per delivery, and counters.
 
 `BridgeTracer` is a `MessageSink` (bridge.sinks): the core hands it every message published
-in the graph, after the local fan-out has queued the deliveries. The edge tells it when the
-frame carrying a publish arrived (`frame_arrived`, just before the core call that handles the
-frame) and when each delivery's frames were written (`delivered`). It never touches the
-protocol: it only counts and appends span tuples (docs/tracing.md).
+in the graph, after the local fan-out has queued the deliveries, with the call's `Context`:
+the frame that carried the publish (`ctx.frame`: when it was read, its size) and the time the
+core handled it (`ctx.now_ns`). The edge tells it when each delivery's frames were written
+(`delivered`). It never touches the protocol or the clock: it only counts and appends span
+tuples (docs/tracing.md).
 """
 
 from __future__ import annotations
 
-import time
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -49,7 +49,6 @@ class BridgeTracer:
         self.spans = SpanBuffer(capacity)
         self.topics: dict[str, TopicTraffic] = {}
         self.names: dict[str, str] = {}
-        self._arrival: tuple[int, int] | None = None  # (arrived_ns, wire_bytes) of the frame
 
     def traffic(self, topic: str) -> TopicTraffic:
         entry = self.topics.get(topic)
@@ -57,21 +56,16 @@ class BridgeTracer:
             entry = self.topics[topic] = TopicTraffic()
         return entry
 
-    def frame_arrived(self, arrived_ns: int, wire_bytes: int) -> None:
-        """The frame the core is about to handle was read at `arrived_ns`."""
-        self._arrival = (arrived_ns, wire_bytes)
-
     def accept(self, ctx: Context, message: TopicMessage, origin_node: str) -> None:
-        """Sink: count the publish and record its `bridge_in` span (frame read → validated)."""
-        arrival, self._arrival = self._arrival, None
+        """Sink: count the publish and record its `bridge_in` span (frame read → handled)."""
         traffic = self.traffic(message.topic)
         traffic.messages_in += 1
         if message.topic == STATS_TOPIC:
             self._learn_name(origin_node, message)
-        if arrival is None:  # published from inside (telemetry, a middleware source)
+        frame = ctx.frame
+        if frame is None:  # published from inside (telemetry, a middleware source)
             return
-        arrived_ns, wire_bytes = arrival
-        traffic.wire_bytes_in += wire_bytes
+        traffic.wire_bytes_in += frame.wire_bytes
         stamp_ns = header_stamp_ns(message.msg)
         if stamp_ns is None or not is_traced(message.topic):
             return
@@ -82,8 +76,8 @@ class BridgeTracer:
             except (SchemaError, KeyError, TypeError, ValueError, AttributeError):
                 payload_bytes = 0
         traffic.payload_bytes_in += payload_bytes
-        self.spans.record(message.topic, stamp_ns, "bridge_in", arrived_ns, time.time_ns(),
-                          payload_bytes, wire_bytes)
+        self.spans.record(message.topic, stamp_ns, "bridge_in", frame.arrived_ns, ctx.now_ns,
+                          payload_bytes, frame.wire_bytes)
 
     def _learn_name(self, node: str, message: TopicMessage) -> None:
         process = message.msg.get("process")

@@ -8,6 +8,7 @@ the 4-byte encapsulation header (``00 01 00 00``, little-endian CDR).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
@@ -15,6 +16,7 @@ import numpy as np
 from schemas import specs
 from schemas.errors import DecodeError, EncodeError
 from schemas.specs import FieldSpec, MessageSpec
+from schemas.values import Message
 
 if TYPE_CHECKING:
     from schemas.registry import TypeRegistry
@@ -23,7 +25,7 @@ if TYPE_CHECKING:
 # -- canonical -> rosbags ---------------------------------------------------------------------
 
 
-def _to_object(classes: Any, spec: MessageSpec, msg: dict) -> Any:
+def _to_object(classes: Any, spec: MessageSpec, msg: Message) -> Any:
     values = {}
     for field in spec.fields:
         values[field.name] = _TO_ROSBAGS[field.category](classes, field, msg[field.name])
@@ -47,20 +49,24 @@ def _contiguous(classes: Any, field: FieldSpec, value: np.ndarray) -> np.ndarray
     return np.ascontiguousarray(value, dtype=field.dtype)
 
 
-def _bools(classes: Any, field: FieldSpec, value: list) -> np.ndarray:
+def _bools(classes: Any, field: FieldSpec, value: list[bool]) -> np.ndarray:
     return np.array(value, dtype=np.bool_)
 
 
-def _nested(classes: Any, field: FieldSpec, value: dict) -> Any:
+def _nested(classes: Any, field: FieldSpec, value: Message) -> Any:
     return _to_object(classes, cast(MessageSpec, field.message), value)
 
 
-def _nested_list(classes: Any, field: FieldSpec, value: list) -> list:
+def _nested_list(classes: Any, field: FieldSpec, value: list[Message]) -> list[Any]:
     spec = cast(MessageSpec, field.message)
     return [_to_object(classes, spec, item) for item in value]
 
 
-_TO_ROSBAGS = {
+# rosbags' message classes and objects are generated at run time: typed Any here.
+_ToRosbags = Callable[[Any, FieldSpec, Any], Any]
+_FromRosbags = Callable[[FieldSpec, Any], Any]
+
+_TO_ROSBAGS: dict[str, _ToRosbags] = {
     specs.BOOL: _same,
     specs.INT: _octet,
     specs.FLOAT: _same,
@@ -78,7 +84,7 @@ _TO_ROSBAGS = {
 # -- rosbags -> canonical ---------------------------------------------------------------------
 
 
-def _to_canonical(spec: MessageSpec, obj: Any) -> dict:
+def _to_canonical(spec: MessageSpec, obj: Any) -> Message:
     return {
         field.name: _FROM_ROSBAGS[field.category](field, getattr(obj, field.name))
         for field in spec.fields
@@ -89,25 +95,34 @@ def _exact_array(field: FieldSpec, value: np.ndarray) -> np.ndarray:
     return value if value.dtype == field.dtype else value.astype(field.dtype)
 
 
-_FROM_ROSBAGS = {
+def _nested_canonical(field: FieldSpec, value: Any) -> Message:
+    return _to_canonical(cast(MessageSpec, field.message), value)
+
+
+def _nested_canonical_list(field: FieldSpec, value: Any) -> list[Message]:
+    spec = cast(MessageSpec, field.message)
+    return [_to_canonical(spec, item) for item in value]
+
+
+_FROM_ROSBAGS: dict[str, _FromRosbags] = {
     specs.BOOL: lambda field, value: bool(value),
     specs.INT: lambda field, value: int(value) & 0xFF if field.base == "byte" else int(value),
     specs.FLOAT: lambda field, value: float(value),
     specs.STRING: lambda field, value: str(value),
-    specs.MESSAGE: lambda field, value: _to_canonical(field.message, value),
+    specs.MESSAGE: _nested_canonical,
     specs.BYTES: lambda field, value: np.asarray(value, dtype=np.uint8).tobytes(),
     specs.NUMERIC_SEQUENCE: _exact_array,
     specs.NUMERIC_FIXED: lambda field, value: np.asarray(value).tolist(),
     specs.BOOL_ARRAY: lambda field, value: [bool(item) for item in value],
     specs.STRING_ARRAY: lambda field, value: list(value),
-    specs.MESSAGE_ARRAY: lambda field, value: [_to_canonical(field.message, v) for v in value],
+    specs.MESSAGE_ARRAY: _nested_canonical_list,
 }
 
 
 # -- public -----------------------------------------------------------------------------------
 
 
-def to_cdr(registry: TypeRegistry, type_name: str, msg: dict) -> bytes:
+def to_cdr(registry: TypeRegistry, type_name: str, msg: Message) -> bytes:
     """Serialize a canonical message to CDR, 4-byte encapsulation header included."""
     spec = registry.message(type_name)
     store = registry.typestore
@@ -118,7 +133,7 @@ def to_cdr(registry: TypeRegistry, type_name: str, msg: dict) -> bytes:
         raise EncodeError(f"cannot encode {spec.name} as CDR: {exc!r}") from None
 
 
-def from_cdr(registry: TypeRegistry, type_name: str, data: bytes) -> dict:
+def from_cdr(registry: TypeRegistry, type_name: str, data: bytes) -> Message:
     """Parse CDR bytes (with header) into the canonical message of ``type_name``."""
     spec = registry.message(type_name)
     try:
@@ -128,7 +143,7 @@ def from_cdr(registry: TypeRegistry, type_name: str, data: bytes) -> dict:
     return _to_canonical(spec, obj)
 
 
-def cdr_size(registry: TypeRegistry, type_name: str, msg: dict) -> int:
+def cdr_size(registry: TypeRegistry, type_name: str, msg: Message) -> int:
     """Serialized size of ``msg`` in bytes (4-byte header included), without serializing.
 
     Uses rosbags' size function on zero-copy views of the arrays: ~10 µs for a 4 MB cloud

@@ -11,6 +11,7 @@ import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from rosbags.interfaces.typing import Typesdict
 from rosbags.typesys import get_types_from_msg
 from rosbags.typesys.base import TypesysError
 
@@ -32,7 +33,7 @@ class InterfaceSet:
     response message names; ``actions`` maps ``pkg/action/T`` to goal, result, feedback names.
     """
 
-    types: dict = field(default_factory=dict)
+    types: Typesdict = field(default_factory=dict)
     services: dict[str, tuple[str, str]] = field(default_factory=dict)
     actions: dict[str, tuple[str, str, str]] = field(default_factory=dict)
 

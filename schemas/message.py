@@ -23,6 +23,7 @@ from schemas import primitives, specs
 from schemas.errors import MessageValidationError
 from schemas.safety import echo
 from schemas.specs import FieldSpec, MessageSpec
+from schemas.values import JsonValue, Message
 
 _NS_PER_S = 1_000_000_000
 _MISSING = object()
@@ -56,20 +57,20 @@ def _describe(value: Any) -> str:
 # -- time -------------------------------------------------------------------------------------
 
 
-def stamp_to_ns(stamp: Mapping) -> int:
+def stamp_to_ns(stamp: Mapping[str, Any]) -> int:
     """``{"sec", "nanosec"}`` (or ``secs``/``nsecs``) -> integer nanoseconds."""
     sec = stamp.get("sec", stamp.get("secs", 0))
     nanosec = stamp.get("nanosec", stamp.get("nsecs", 0))
     return int(sec) * _NS_PER_S + int(nanosec)
 
 
-def ns_to_stamp(ns: int) -> dict:
+def ns_to_stamp(ns: int) -> dict[str, int]:
     """Integer nanoseconds -> ``{"sec": int, "nanosec": int}`` with ``0 <= nanosec < 1e9``."""
     sec, nanosec = divmod(int(ns), _NS_PER_S)
     return {"sec": sec, "nanosec": nanosec}
 
 
-def _checked_time_int(value: Any, bounds: tuple[int, int], type_name: str) -> int:
+def _checked_time_int(value: object, bounds: tuple[int, int], type_name: str) -> int:
     if type(value) is not int:
         if isinstance(value, np.integer) and not isinstance(value, bool):
             value = int(value)
@@ -80,7 +81,7 @@ def _checked_time_int(value: Any, bounds: tuple[int, int], type_name: str) -> in
     return value
 
 
-def _time(spec: MessageSpec, raw: Any, now_ns: int) -> dict:
+def _time(spec: MessageSpec, raw: JsonValue, now_ns: int) -> dict[str, int]:
     if raw == "now" and spec.name.endswith("/Time"):
         return ns_to_stamp(now_ns)
     if not isinstance(raw, Mapping):
@@ -111,7 +112,7 @@ def _bool(field: FieldSpec, value: Any, now_ns: int) -> bool:
     raise _FieldError(f"expected bool, got {_describe(value)}")
 
 
-def _int(field: FieldSpec, value: Any, now_ns: int) -> int:
+def _int(field: FieldSpec, value: object, now_ns: int) -> int:
     if type(value) is not int:
         if isinstance(value, np.integer):
             value = int(value)
@@ -123,12 +124,11 @@ def _int(field: FieldSpec, value: Any, now_ns: int) -> int:
     return value
 
 
-def _float(field: FieldSpec, value: Any, now_ns: int) -> float:
-    kind = type(value)
-    if kind is not float:
+def _float(field: FieldSpec, value: object, now_ns: int) -> float:
+    if type(value) is not float:
         if value is None:  # roslibjs sends NaN and ±Inf as null
             return math.nan
-        if kind is bool or isinstance(value, np.bool_):
+        if type(value) is bool or isinstance(value, np.bool_):
             raise _FieldError(f"expected {field.base}, got {_describe(value)}")
         if not isinstance(value, int | float | np.integer | np.floating):
             raise _FieldError(f"expected {field.base}, got {_describe(value)}")
@@ -210,7 +210,8 @@ def _float_array(field: FieldSpec, array: np.ndarray, dtype: np.dtype) -> np.nda
     return array.astype(dtype)
 
 
-def _list_to_array(field: FieldSpec, items: list | tuple, dtype: np.dtype) -> np.ndarray:
+def _list_to_array(field: FieldSpec, items: list[Any] | tuple[Any, ...],
+                   dtype: np.dtype[Any]) -> np.ndarray:
     """A JSON list -> ndarray of ``dtype`` with the scalar rules (no float for int, no bool)."""
     if not items:
         return np.empty(0, dtype=dtype)
@@ -265,13 +266,13 @@ def _numeric_sequence(field: FieldSpec, value: Any, now_ns: int) -> np.ndarray:
     return out
 
 
-def _numeric_fixed(field: FieldSpec, value: Any, now_ns: int) -> list:
-    out = _numeric_array(field, value).tolist()
+def _numeric_fixed(field: FieldSpec, value: JsonValue, now_ns: int) -> list[Any]:
+    out: list[Any] = _numeric_array(field, value).tolist()
     _check_length(field, len(out))
     return out
 
 
-def _each(field: FieldSpec, value: Any, convert: _Normalizer, now_ns: int) -> list:
+def _each(field: FieldSpec, value: JsonValue, convert: _Normalizer, now_ns: int) -> list[Any]:
     if not isinstance(value, list | tuple | np.ndarray):
         raise _FieldError(f"expected a list, got {_describe(value)}")
     out = []
@@ -285,19 +286,19 @@ def _each(field: FieldSpec, value: Any, convert: _Normalizer, now_ns: int) -> li
     return out
 
 
-def _bool_array(field: FieldSpec, value: Any, now_ns: int) -> list:
+def _bool_array(field: FieldSpec, value: JsonValue, now_ns: int) -> list[Any]:
     return _each(field, value, _bool, now_ns)
 
 
-def _string_array(field: FieldSpec, value: Any, now_ns: int) -> list:
+def _string_array(field: FieldSpec, value: JsonValue, now_ns: int) -> list[Any]:
     return _each(field, value, _string, now_ns)
 
 
-def _message_array(field: FieldSpec, value: Any, now_ns: int) -> list:
+def _message_array(field: FieldSpec, value: JsonValue, now_ns: int) -> list[Any]:
     return _each(field, value, _message_field, now_ns)
 
 
-def _message_field(field: FieldSpec, value: Any, now_ns: int) -> dict:
+def _message_field(field: FieldSpec, value: JsonValue, now_ns: int) -> Message:
     return _message(cast(MessageSpec, field.message), value, now_ns)
 
 
@@ -319,7 +320,7 @@ _NORMALIZERS: dict[str, _Normalizer] = {
 # -- messages ---------------------------------------------------------------------------------
 
 
-def _message(spec: MessageSpec, raw: Any, now_ns: int) -> dict:
+def _message(spec: MessageSpec, raw: JsonValue, now_ns: int) -> Message:
     if spec.name in primitives.TIME_TYPES:
         return _time(spec, raw, now_ns)
     if not isinstance(raw, Mapping):
@@ -347,7 +348,7 @@ def _message(spec: MessageSpec, raw: Any, now_ns: int) -> dict:
     return out
 
 
-def normalize(spec: MessageSpec, raw: Any, *, now_ns: int) -> dict:
+def normalize(spec: MessageSpec, raw: JsonValue, *, now_ns: int) -> Message:
     """Validate ``raw`` against ``spec`` and return the canonical message dict.
 
     ``raw`` is what a JSON or CBOR decoder produced (or a canonical message); ``None`` and
@@ -383,6 +384,6 @@ def _fresh_default(field: FieldSpec) -> Any:
     return field.default
 
 
-def default_message(spec: MessageSpec) -> dict:
+def default_message(spec: MessageSpec) -> Message:
     """The all-defaults canonical message of ``spec`` (zeros, empty arrays, stamp 0)."""
     return {field.name: _fresh_default(field) for field in spec.fields}

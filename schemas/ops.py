@@ -2,9 +2,9 @@
 
 Field rules follow the protocol reference §2. Models allow extra keys (clients send
 op-specific extras such as ``fragment_size`` anywhere; rosbridge ignores them) and are
-frozen. Payloads (``msg``, ``args``, ``values``) are typed ``Any`` and only checked for
-their outer shape here, so a 4 MB message is never walked or copied by pydantic; the
-message normaliser validates them against their type later.
+frozen. Payloads (``msg``, ``args``, ``values``) are arbitrary JSON (``schemas.values``)
+and only checked for their outer shape here, so a 4 MB message is never walked or copied
+by pydantic; the message normaliser validates them against their type later.
 """
 
 from __future__ import annotations
@@ -12,13 +12,13 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from types import MappingProxyType
-from typing import Annotated, Any, Literal, NamedTuple
+from typing import Annotated, Any, Literal, NamedTuple, TypeVar
 
 from pydantic import (
-    AfterValidator,
     BaseModel,
     ConfigDict,
     Field,
+    PlainValidator,
     StrictBool,
     StrictInt,
     StrictStr,
@@ -29,6 +29,7 @@ from pydantic import (
 
 from schemas.errors import SchemaError
 from schemas.safety import echo
+from schemas.values import JsonObject, JsonValue, OpId
 
 #: Longest `id` string accepted: ids are echoed in answers (the bridge's own request ids,
 #: `service_request:<247-character name>:<n>`, fit).
@@ -39,7 +40,7 @@ MAX_NAME_CHARS = 512
 MAX_TIMEOUT_S = 86_400.0
 
 
-def _check_id(value: Any) -> Any:
+def _check_id(value: JsonValue) -> OpId:
     if value is None or isinstance(value, bool | int | float):
         return value
     if isinstance(value, str) and len(value) <= MAX_ID_CHARS:
@@ -47,7 +48,7 @@ def _check_id(value: Any) -> Any:
     raise ValueError(f"must be a string of at most {MAX_ID_CHARS} characters, a number or null")
 
 
-def reply_id(value: Any) -> Any:
+def reply_id(value: JsonValue) -> OpId:
     """The id to echo in an answer to a message: its own if acceptable, else None."""
     try:
         return _check_id(value)
@@ -56,7 +57,7 @@ def reply_id(value: Any) -> Any:
 
 
 #: An op's `id`: echoed back, so it must be short (rosbridge clients send strings or numbers).
-Id = Annotated[Any, AfterValidator(_check_id)]
+Id = Annotated[OpId, PlainValidator(_check_id)]
 #: A topic, service, action or type string; names are validated by the bridge after this.
 Name = Annotated[StrictStr, StringConstraints(max_length=MAX_NAME_CHARS)]
 
@@ -64,7 +65,7 @@ Name = Annotated[StrictStr, StringConstraints(max_length=MAX_NAME_CHARS)]
 class OpError(SchemaError):
     """An incoming op that is malformed; ``op`` and ``id`` are what could be read of it."""
 
-    def __init__(self, message: str, op: str | None = None, id: Any = None) -> None:
+    def __init__(self, message: str, op: str | None = None, id: JsonValue = None) -> None:
         super().__init__(message)
         self.op = op
         self.id = id
@@ -76,17 +77,25 @@ class OpBase(BaseModel):
     model_config = ConfigDict(extra="allow", frozen=True)
 
 
-def _object_or_empty(value: Any) -> Any:
+def _object_or_empty(value: JsonValue) -> JsonObject | list[JsonValue]:
     """``args``: an object or a positional list; anything else means an empty request."""
     return value if isinstance(value, dict | list) else {}
 
 
-def _object_required(value: Any) -> Any:
+def _object_required(value: JsonValue) -> JsonObject:
     if value is None:
         return {}
     if not isinstance(value, dict):
         raise ValueError("must be an object")
     return value
+
+
+# Payloads: taken as they are (never walked or copied by pydantic), only their outer shape
+# checked.
+#: An object; ``null`` means an empty one.
+Payload = Annotated[JsonObject, PlainValidator(_object_required)]
+#: Request arguments: an object or a positional list; anything else means none.
+Arguments = Annotated[JsonObject | list[JsonValue], PlainValidator(_object_or_empty)]
 
 
 # -- topics -----------------------------------------------------------------------------------
@@ -99,7 +108,7 @@ class Advertise(OpBase):
     type: Name
     latch: StrictBool = False
     queue_size: StrictInt = 100
-    qos: dict | None = None
+    qos: JsonObject | None = None
 
 
 class Unadvertise(OpBase):
@@ -111,13 +120,11 @@ class Unadvertise(OpBase):
 class Publish(OpBase):
     op: Literal["publish"] = "publish"
     topic: Name
-    msg: Any = Field(default_factory=dict)
+    msg: Payload = Field(default_factory=dict)
     id: Id = None
     latch: StrictBool = False
     queue_size: StrictInt = 100
     type: Name | None = None
-
-    _check_msg = field_validator("msg")(_object_required)
 
 
 class Subscribe(OpBase):
@@ -129,7 +136,7 @@ class Subscribe(OpBase):
     queue_length: StrictInt = 0
     fragment_size: StrictInt | None = None
     compression: StrictStr = "none"
-    qos: dict | None = None
+    qos: JsonObject | None = None
 
 
 class Unsubscribe(OpBase):
@@ -145,13 +152,11 @@ class CallService(OpBase):
     op: Literal["call_service"] = "call_service"
     id: Id = None
     service: Name
-    args: Any = Field(default_factory=dict)
-    type: Any = None  # accepted and ignored: the graph decides (Lichtblick sends ROS 1 names)
+    args: Arguments = Field(default_factory=dict)
+    type: JsonValue = None  # accepted and ignored: the graph decides (Lichtblick: ROS 1 names)
     fragment_size: StrictInt | None = None
     compression: StrictStr = "none"
     timeout: Annotated[float, Field(allow_inf_nan=False)] | None = None  # seconds
-
-    _check_args = field_validator("args")(_object_or_empty)
 
 
 class AdvertiseService(OpBase):
@@ -170,7 +175,7 @@ class UnadvertiseService(OpBase):
 class ServiceResponse(OpBase):
     op: Literal["service_response"] = "service_response"
     service: Name
-    values: Any = None  # an object on success, the error text on failure
+    values: JsonValue = None  # an object on success, the error text on failure
     result: StrictBool
     id: Id = None
 
@@ -183,12 +188,10 @@ class SendActionGoal(OpBase):
     id: Id = None
     action: Name
     action_type: Name
-    args: Any = Field(default_factory=dict)
+    args: Arguments = Field(default_factory=dict)
     feedback: bool = False
     fragment_size: StrictInt | None = None
     compression: StrictStr = "none"
-
-    _check_args = field_validator("args")(_object_or_empty)
 
 
 class CancelActionGoal(OpBase):
@@ -200,16 +203,14 @@ class CancelActionGoal(OpBase):
 class ActionFeedback(OpBase):
     op: Literal["action_feedback"] = "action_feedback"
     action: Name
-    values: Any = Field(default_factory=dict)
+    values: Payload = Field(default_factory=dict)
     id: Id = None
-
-    _check_values = field_validator("values")(_object_required)
 
 
 class ActionResult(OpBase):
     op: Literal["action_result"] = "action_result"
     action: Name
-    values: Any = None  # an object, or the error text when result is false
+    values: JsonValue = None  # an object, or the error text when result is false
     status: StrictInt
     result: StrictBool
     id: Id = None
@@ -231,16 +232,23 @@ class UnadvertiseAction(OpBase):
 # -- framing and status -----------------------------------------------------------------------
 
 
+def _fragment_id(value: JsonValue) -> str | int:
+    if isinstance(value, bool) or not isinstance(value, str | int):
+        raise ValueError("must be a string or an integer")
+    _check_id(value)
+    return value
+
+
 class Fragment(OpBase):
     op: Literal["fragment"] = "fragment"
-    id: Id
+    id: Annotated[str | int, PlainValidator(_fragment_id)]  # keys the pieces of one message
     data: StrictStr
-    num: StrictInt
-    total: StrictInt  # rosbridge sends a float ((len-1)/size + 1); clients floor it
+    num: StrictInt  # 0 <= num < total, checked against the first fragment's total
+    total: Annotated[StrictInt, Field(ge=1)]  # rosbridge sends a float ((len-1)/size + 1)
 
     @field_validator("total", mode="before")
     @classmethod
-    def _floor_total(cls, value: Any) -> Any:
+    def _floor_total(cls, value: JsonValue) -> JsonValue:
         if isinstance(value, float) and math.isfinite(value):
             return math.floor(value)
         return value
@@ -267,9 +275,9 @@ class Auth(OpBase):
     client: StrictStr
     dest: StrictStr
     rand: StrictStr
-    t: Any
+    t: JsonValue
     level: StrictStr
-    end: Any
+    end: JsonValue
 
 
 class Status(OpBase):
@@ -303,9 +311,18 @@ OpModel = (
 )
 Op = Annotated[OpModel, Field(discriminator="op")]
 
+
+
+def op_name(model: type[OpBase]) -> str:
+    """The literal ``op`` of a model class (``Publish`` -> ``"publish"``)."""
+    name = model.model_fields["op"].default
+    assert isinstance(name, str), model
+    return name
+
+
 #: op name -> model class.
 MODELS: Mapping[str, type[OpBase]] = MappingProxyType(
-    {model.model_fields["op"].default: model for model in OpModel.__args__}
+    {op_name(model): model for model in OpModel.__args__}
 )
 
 _PHRASES = {
@@ -319,7 +336,7 @@ _PHRASES = {
 }
 
 
-def _short_repr(value: Any) -> str:
+def _short_repr(value: JsonValue) -> str:
     return echo(value, 60)
 
 
@@ -340,7 +357,7 @@ def _describe_error(op: str, error: Mapping[str, Any], more: int) -> str:
     return text + (f" (and {more} more problem(s))" if more else "")
 
 
-def parse_op(obj: Any) -> OpModel:
+def parse_op(obj: JsonValue) -> OpModel:
     """Validate one decoded JSON/CBOR object as a rosbridge op.
 
     Raises :class:`OpError` with a one-line message naming the op and the bad field, e.g.
@@ -358,31 +375,43 @@ def parse_op(obj: Any) -> OpModel:
     model = MODELS.get(op)
     if model is None:
         raise OpError(f"unknown op {_short_repr(op)}", op=op, id=op_id)
+    return validate_op(model, obj)  # type: ignore[return-value]  # MODELS holds OpModel's
+
+
+OpT = TypeVar("OpT", bound=OpBase)
+
+
+def validate_op(model: type[OpT], obj: Mapping[str, JsonValue]) -> OpT:
+    """`obj` (whose ``op`` names `model`) as a `model`; :class:`OpError` naming the bad field
+    as `parse_op` does."""
     try:
-        return model.model_validate(obj)  # type: ignore[return-value]
+        return model.model_validate(obj)
     except ValidationError as exc:
+        op = op_name(model)
         errors = exc.errors(include_url=False)
-        raise OpError(_describe_error(op, errors[0], len(errors) - 1), op=op, id=op_id) from None
+        raise OpError(_describe_error(op, errors[0], len(errors) - 1), op=op,
+                      id=obj.get("id")) from None
 
 
 class PublishFields(NamedTuple):
     """A well-formed ``publish`` as `parse_publish` reads it: the fields of :class:`Publish`."""
 
     topic: str
-    msg: dict
-    id: Any = None
+    msg: JsonObject
+    id: OpId = None
     latch: bool = False
     queue_size: int = 100
     type: str | None = None
 
 
-def parse_publish(obj: Mapping[str, Any]) -> Publish | PublishFields:
+def parse_publish(obj: Mapping[str, JsonValue]) -> PublishFields:
     """`parse_op` for the most frequent op, without pydantic when nothing needs it.
 
     A ``publish`` whose fields already have the types and sizes :class:`Publish` asks for (the
-    normal case, ~0.4 µs instead of ~2 µs) becomes a `PublishFields`; anything else goes
-    through `parse_op`, which refuses it with the same message as always. The message itself
-    is not looked at here: it is validated against its topic's type afterwards, either way.
+    normal case, ~0.4 µs instead of ~2 µs) is read directly; anything else goes through
+    pydantic, which refuses it with the same message as `parse_op`. Either way the result is
+    a `PublishFields`. The message itself is not looked at here: it is validated against its
+    topic's type afterwards.
     """
     topic, msg, op_id = obj.get("topic"), obj.get("msg", _ABSENT), obj.get("id")
     latch, queue_size = obj.get("latch", False), obj.get("queue_size", 100)
@@ -397,13 +426,14 @@ def parse_publish(obj: Mapping[str, Any]) -> Publish | PublishFields:
             return PublishFields(topic, msg, op_id, latch, queue_size, type_name)
         if msg is None or msg is _ABSENT:
             return PublishFields(topic, {}, op_id, latch, queue_size, type_name)
-    return parse_op(obj)  # type: ignore[return-value]
+    op = validate_op(Publish, obj)
+    return PublishFields(op.topic, op.msg, op.id, op.latch, op.queue_size, op.type)
 
 
 _ABSENT = object()
 
 
-def to_wire(model: OpBase) -> dict:
+def to_wire(model: OpBase) -> JsonObject:
     """The op as a dict in rosbridge key order, with only ``op`` and the fields that were set.
 
     ``id`` therefore appears only when the op was built (or parsed) with one.

@@ -8,11 +8,13 @@ built on first use and cached on the instance.
 from __future__ import annotations
 
 import logging
-from collections.abc import Iterable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from rosbags.interfaces import Nodetype
+from rosbags.interfaces.typing import BaseDesc, FieldDesc, NameDesc, Typesdict
 from rosbags.typesys import Stores, get_typestore
 from rosbags.typesys.base import TypesysError
 from rosbags.typesys.store import Typestore
@@ -20,7 +22,7 @@ from rosbags.typesys.store import Typestore
 from schemas import primitives, specs
 from schemas.errors import InvalidTypeNameError, SchemaError, UnknownTypeError
 from schemas.interface_files import InterfaceSet, load_directory
-from schemas.rosapi_defs import message_typedefs
+from schemas.rosapi_defs import TypeDef, message_typedefs
 from schemas.specs import ActionSpec, ArrayKind, FieldSpec, MessageSpec, ServiceSpec
 from schemas.typenames import normalize_type_name, short_type_name
 
@@ -90,7 +92,7 @@ class TypeRegistry:
         self._actions.update(found.actions)
         self._index_short_names(found.types)
 
-    def _check_references(self, types: dict) -> None:
+    def _check_references(self, types: Typesdict) -> None:
         for name, (_consts, fields) in types.items():
             for field_name, node in fields:
                 ref = _referenced_type(node)
@@ -175,7 +177,7 @@ class TypeRegistry:
             self._full_texts[full] = text
         return text
 
-    def typedefs(self, name: str) -> list[dict]:
+    def typedefs(self, name: str) -> list[TypeDef]:
         """rosapi ``TypeDef`` dicts: the requested type first, then nested types, recursively."""
         return message_typedefs(self.message(name))
 
@@ -195,27 +197,21 @@ class TypeRegistry:
         self._specs[full] = spec
         return spec
 
-    def _field_spec(self, owner: str, name: str, node: tuple) -> FieldSpec:
-        nodetype, details = node
-        array: ArrayKind = None
-        length = 0
-        if nodetype in _ARRAY_KIND:
-            (nodetype, details), length = details
-            array = _ARRAY_KIND[node[0]]
-            if array == "sequence" and length:
-                array = "bounded"
-        if nodetype == Nodetype.NAME:
+    def _field_spec(self, owner: str, name: str, node: FieldDesc) -> FieldSpec:
+        element, array, length = _element(node)
+        if element[0] == Nodetype.NAME:
+            type_name = element[1]
             return FieldSpec(
                 name=name,
-                base=details,
+                base=type_name,
                 is_message=True,
                 array=array,
                 length=length,
                 default=None,
-                message=self.message(details),
+                message=self.message(type_name),
                 category=specs.MESSAGE_ARRAY if array else specs.MESSAGE,
             )
-        base, string_bound = details
+        base, string_bound = element[1]
         category = _primitive_category(base, array)
         dtype = primitives.NUMERIC_DTYPES.get(base)
         return FieldSpec(
@@ -234,11 +230,20 @@ class TypeRegistry:
         )
 
 
-def _referenced_type(node: tuple) -> str | None:
-    nodetype, details = node
-    if nodetype in _ARRAY_KIND:
-        nodetype, details = details[0]
-    return details if nodetype == Nodetype.NAME else None
+def _element(node: FieldDesc) -> tuple[BaseDesc | NameDesc, ArrayKind, int]:
+    """A field's element type, its array kind (None: a single value) and array length."""
+    if node[0] == Nodetype.ARRAY or node[0] == Nodetype.SEQUENCE:
+        element, length = node[1]
+        array = _ARRAY_KIND[node[0]]
+        if array == "sequence" and length:
+            array = "bounded"
+        return element, array, length
+    return node, None, 0
+
+
+def _referenced_type(node: FieldDesc) -> str | None:
+    element, _array, _length = _element(node)
+    return element[1] if element[0] == Nodetype.NAME else None
 
 
 def _with_kind(name: str, kind: str) -> str:
@@ -248,7 +253,9 @@ def _with_kind(name: str, kind: str) -> str:
     return f"{pkg}/{kind}/{leaf}"
 
 
-def _never_raises(lookup, name: object) -> bool:
+def _never_raises(lookup: Callable[[str], object], name: object) -> bool:
+    if not isinstance(name, str):
+        return False
     try:
         lookup(name)
     except (InvalidTypeNameError, UnknownTypeError, KeyError):
@@ -273,7 +280,8 @@ def _primitive_category(base: str, array: str | None) -> str:
     return specs.BOOL_ARRAY if base == "bool" else specs.STRING_ARRAY
 
 
-def _primitive_default(base, array, length, category, dtype):
+def _primitive_default(base: str, array: ArrayKind, length: int, category: str,
+                       dtype: np.dtype[Any] | None) -> object:
     if array is None:
         return primitives.scalar_default(base)
     fixed_length = length if array == "fixed" else 0

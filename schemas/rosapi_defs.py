@@ -13,6 +13,9 @@ from schemas import primitives
 from schemas.specs import FieldSpec, MessageSpec
 from schemas.typenames import short_type_name
 
+#: rosapi_msgs/msg/TypeDef as a dict: the type's name, then one list entry per field.
+TypeDef = dict[str, str | list[str] | list[int]]
+
 
 def _field_type(field: FieldSpec) -> str:
     if field.is_message:
@@ -34,7 +37,7 @@ def _example(field: FieldSpec) -> str:
     return str(field.default)
 
 
-def typedef(spec: MessageSpec) -> dict:
+def typedef(spec: MessageSpec) -> TypeDef:
     """The one TypeDef dict of ``spec`` (no nested types)."""
     return {
         "type": short_type_name(spec.name),
@@ -47,10 +50,10 @@ def typedef(spec: MessageSpec) -> dict:
     }
 
 
-def message_typedefs(spec: MessageSpec) -> list[dict]:
+def message_typedefs(spec: MessageSpec) -> list[TypeDef]:
     """TypeDefs of ``spec`` then of every nested type, depth first, each type once."""
     seen: set[str] = set()
-    out: list[dict] = []
+    out: list[TypeDef] = []
 
     def visit(current: MessageSpec) -> None:
         if current.name in seen:

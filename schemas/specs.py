@@ -60,7 +60,7 @@ class MessageSpec:
     name: str
     fields: tuple[FieldSpec, ...]
     constants: tuple[tuple[str, str, Any], ...] = ()
-    by_name: MappingProxyType = field(
+    by_name: MappingProxyType[str, FieldSpec] = field(
         default_factory=lambda: MappingProxyType({}), compare=False, hash=False, repr=False
     )
 

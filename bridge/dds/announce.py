@@ -21,6 +21,7 @@ from bridge.dds.topic_mirror import type_hash_user_data
 from schemas.codec_cdr import from_cdr, to_cdr
 from schemas.errors import SchemaError
 from schemas.registry import TypeRegistry
+from schemas.values import Message
 
 logger = logging.getLogger("bridge.dds")
 
@@ -34,7 +35,7 @@ def split_node_name(node: str) -> tuple[str, str]:
 
 
 def participant_entities(participant: bytes, node: str, readers: Sequence[bytes],
-                         writers: Sequence[bytes]) -> dict:
+                         writers: Sequence[bytes]) -> Message:
     """The canonical ParticipantEntitiesInfo announcing `node` with these endpoints."""
     namespace, name = split_node_name(node)
     return {"gid": {"data": participant},

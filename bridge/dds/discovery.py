@@ -10,7 +10,7 @@ name made from the participant: `/dds_participant_<8 hex digits>`. Pure: no Cycl
 from __future__ import annotations
 
 import zlib
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable
 from dataclasses import dataclass, field
 
 from bridge.dds.naming import (
@@ -20,6 +20,7 @@ from bridge.dds.naming import (
     type_from_dds,
 )
 from bridge.dds.qos import DEFAULT, QosProfile
+from schemas.values import Message
 
 
 @dataclass(frozen=True)
@@ -77,9 +78,9 @@ def participant_node(participant: bytes) -> str:
     return f"/dds_participant_{zlib.crc32(participant[:12]):08x}"
 
 
-def nodes_from_discovery_info(msg: Mapping) -> tuple[bytes, tuple[NodeEntities, ...]]:
+def nodes_from_discovery_info(msg: Message) -> tuple[bytes, tuple[NodeEntities, ...]]:
     """(participant gid, its nodes) from a canonical `ParticipantEntitiesInfo` message."""
-    def gids(items: Iterable[Mapping]) -> frozenset[bytes]:
+    def gids(items: Iterable[Message]) -> frozenset[bytes]:
         return frozenset(bytes(item["data"]) for item in items)
 
     nodes = tuple(NodeEntities(node_name(n["node_namespace"], n["node_name"]),

@@ -16,8 +16,9 @@ from bridge.graph import Graph
 
 logger = logging.getLogger("bridge.dds")
 
-# Advertisement id of a remote publisher in the graph (websocket ids are client-chosen).
-REMOTE_ADVERTISEMENT = ("dds",)
+# Advertisement id of a remote publisher in the graph: ids are kept per node, and a remote
+# node has no websocket client choosing ids of its own.
+REMOTE_ADVERTISEMENT = "dds"
 
 
 class GraphSync:

@@ -24,11 +24,18 @@ import asyncio
 import contextlib
 import logging
 import time
-from typing import TYPE_CHECKING, Any
+from collections.abc import Callable
+from typing import TYPE_CHECKING
 
 from bridge.dds.announce import Announcer
 from bridge.dds.cyclone_xml import CycloneSettings
-from bridge.dds.discovery import DomainView, NodeEntities, Snapshot, participant_node
+from bridge.dds.discovery import (
+    DomainView,
+    NodeEntities,
+    RemoteTopic,
+    Snapshot,
+    participant_node,
+)
 from bridge.dds.graph_sync import GraphSync
 from bridge.dds.outbox import Outbox, WriterThread
 from bridge.dds.participant import DdsParticipant, Pump
@@ -164,9 +171,12 @@ class DdsMirror:
 
     # -- discovery ---------------------------------------------------------------------------
 
-    def _take_discovery(self) -> Any:
+    def _take_discovery(self) -> Callable[[], None] | None:
         snapshot = self.participant.snapshot()
-        return lambda: self._loop.call_soon_threadsafe(self._snapshot_seen, snapshot)
+
+        def seen() -> None:
+            self._loop.call_soon_threadsafe(self._snapshot_seen, snapshot)
+        return seen
 
     def _snapshot_seen(self, snapshot: Snapshot) -> None:
         self.view.update_snapshot(snapshot)
@@ -208,8 +218,8 @@ class DdsMirror:
         service_readers, service_writers = self.services.guids()
         self.announcer.announce(topic_readers + service_readers, topic_writers + service_writers)
 
-    def _wanted_topics(self, local: set[str], remote: dict) -> tuple[dict[str, Wanted],
-                                                                      dict[str, Wanted]]:
+    def _wanted_topics(self, local: set[str], remote: dict[str, RemoteTopic],
+                       ) -> tuple[dict[str, Wanted], dict[str, Wanted]]:
         writers: dict[str, Wanted] = {}
         readers: dict[str, Wanted] = {}
         for entry in self.core.state.graph.topics.values():

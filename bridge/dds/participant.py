@@ -29,6 +29,7 @@ from cyclonedds.builtin import (
     BuiltinTopicDcpsSubscription,
 )
 from cyclonedds.core import (
+    Entity,
     GuardCondition,
     InstanceState,
     Qos,
@@ -38,6 +39,7 @@ from cyclonedds.core import (
     WaitSet,
 )
 from cyclonedds.domain import Domain, DomainParticipant
+from cyclonedds.idl import IdlStruct
 from cyclonedds.internal import load_cyclonedds
 from cyclonedds.pub import DataWriter, Publisher
 from cyclonedds.qos import Policy
@@ -125,7 +127,7 @@ def user_data_of(qos: Qos | None) -> str:
 class RawWriter:
     """A DataWriter fed with CDR bytes."""
 
-    def __init__(self, entity: DataWriter) -> None:
+    def __init__(self, entity: DataWriter[IdlStruct]) -> None:
         self.entity = entity
         self.guid = entity.guid.bytes
         self.instance_handle = entity.get_instance_handle() & 0xFFFF_FFFF_FFFF_FFFF  # uint64
@@ -140,7 +142,7 @@ class RawWriter:
 class RawReader:
     """A DataReader whose samples are taken as CDR bytes."""
 
-    def __init__(self, entity: DataReader) -> None:
+    def __init__(self, entity: DataReader[IdlStruct]) -> None:
         self.entity = entity
         self.guid = entity.guid.bytes
         self.condition = ReadCondition(entity, SampleState.NotRead | ViewState.Any
@@ -212,7 +214,7 @@ class DdsParticipant:
         self.subscriber = Subscriber(self.participant)
         self.types = IdlTypes()
         self.pairings = itertools.count(1)  # numbers rmw-style client/service pairing ids
-        self._topics: dict[str, Topic] = {}
+        self._topics: dict[str, Topic[IdlStruct]] = {}
         self._lock = threading.Lock()
         self._discovery = [
             BuiltinDataReader(self.participant, topic) for topic in
@@ -228,7 +230,7 @@ class DdsParticipant:
         """Eight hex digits naming this participant (its node name's suffix)."""
         return f"{zlib.crc32(self.guid[:12]):08x}"
 
-    def topic(self, dds_name: str, data_type: type) -> Topic:
+    def topic(self, dds_name: str, data_type: type[IdlStruct]) -> Topic[IdlStruct]:
         with self._lock:
             topic = self._topics.get(dds_name)
             if topic is None:
@@ -247,7 +249,7 @@ class DdsParticipant:
         return RawReader(DataReader(self.subscriber, topic, cyclone_qos(profile, user_data)))
 
     @staticmethod
-    def delete(entity: Any) -> None:
+    def delete(entity: Entity) -> None:
         """Delete a writer, reader or condition now (not when Python collects it)."""
         entity.__del__()
 
@@ -293,7 +295,7 @@ class Pump:
         self._waitset = WaitSet(participant.participant)
         self._wake = GuardCondition(participant.participant)
         self._waitset.attach(self._wake)
-        self._handlers: dict[int, tuple[Any, Handler]] = {}
+        self._handlers: dict[int, tuple[Entity, Handler]] = {}
         self._lock = threading.Lock()
         self._running = True
         self._thread = threading.Thread(target=self._run, name="bridge-dds-pump", daemon=True)
@@ -301,13 +303,13 @@ class Pump:
     def start(self) -> None:
         self._thread.start()
 
-    def watch(self, condition: Any, handler: Handler) -> None:
+    def watch(self, condition: Entity, handler: Handler) -> None:
         with self._lock:
             self._handlers[id(condition)] = (condition, handler)
             self._waitset.attach(condition)
         self._wake.set(True)
 
-    def unwatch(self, condition: Any) -> None:
+    def unwatch(self, condition: Entity) -> None:
         with self._lock:
             if self._handlers.pop(id(condition), None) is not None:
                 self._waitset.detach(condition)

@@ -12,7 +12,6 @@ from __future__ import annotations
 import itertools
 import logging
 from collections.abc import Callable
-from typing import Any
 
 from bridge.dds import request_header
 from bridge.dds.naming import reply_topic, request_topic
@@ -24,10 +23,11 @@ from bridge.dds.topic_mirror import type_hash_user_data
 from schemas.codec_cdr import from_cdr, to_cdr
 from schemas.errors import SchemaError
 from schemas.registry import TypeRegistry
+from schemas.values import Message
 
 logger = logging.getLogger("bridge.dds")
 
-Received = Callable[[str, RequestId, dict[str, Any]], None]  # (service, id, message)
+Received = Callable[[str, RequestId, Message], object]  # (service, id, message)
 
 
 def pairing_id(participant_guid: bytes, number: int) -> str:
@@ -66,7 +66,7 @@ class _ServiceEndpoints:
             key + type_hash_user_data(registry, incoming.name))
         pump.watch(self.reader.condition, self._take)
 
-    def send(self, request: RequestId, msg: dict[str, Any]) -> None:
+    def send(self, request: RequestId, msg: Message) -> None:
         """Queue a request or reply (serialized and written on the writer thread)."""
         def write() -> None:
             cdr = request_header.wrap(to_cdr(self._registry, self._outgoing, msg), request)
@@ -126,7 +126,7 @@ class ServiceClient(_ServiceEndpoints):
                          on_reply)
         self._sequence = itertools.count(1)
 
-    def request(self, msg: dict[str, Any]) -> RequestId:
+    def request(self, msg: Message) -> RequestId:
         """Send a request; its reply comes back with the returned id."""
         request = RequestId(self.writer.instance_handle, next(self._sequence))
         self.send(request, msg)

@@ -19,29 +19,32 @@ from __future__ import annotations
 import logging
 import time
 from collections.abc import Callable
-from typing import Any
+from typing import TypeVar
 
 from bridge.core import BridgeCore
 from bridge.dds.discovery import RemoteService
 from bridge.dds.outbox import Outbox
 from bridge.dds.participant import DdsParticipant, Pump
 from bridge.dds.request_header import RequestId
-from bridge.dds.service_endpoints import ServiceClient, ServiceServer
+from bridge.dds.service_endpoints import Received, ServiceClient, ServiceServer
 from bridge.effects import Effect, Send
 from bridge.outgoing import ControlMessage
 from schemas.errors import SchemaError
 from schemas.registry import TypeRegistry
+from schemas.values import JsonObject, JsonValue, Message
 
 logger = logging.getLogger("bridge.dds")
 
 Apply = Callable[[list[Effect]], None]
 ToLoop = Callable[..., object]  # loop.call_soon_threadsafe
+EndpointT = TypeVar("EndpointT", ServiceServer, ServiceClient)
 
 
 class ServiceMirror:
     """Keeps DDS service endpoints and stand-in clients in step with both graphs."""
 
-    def __init__(self, core: BridgeCore, apply: Apply, internal: dict[int, Callable],
+    def __init__(self, core: BridgeCore, apply: Apply,
+                 internal: dict[int, Callable[[Send], None]],
                  participant: DdsParticipant, pump: Pump, outbox: Outbox,
                  registry: TypeRegistry, node: str, to_loop: ToLoop) -> None:
         self._core, self._apply, self._internal = core, apply, internal
@@ -55,7 +58,8 @@ class ServiceMirror:
         self.stand_ins: dict[str, int] = {}  # remote node -> its stand-in client id
         self._remote: dict[str, RemoteService] = {}
         self._from_dds: dict[str, tuple[ServiceServer, RequestId]] = {}
-        self._to_dds: dict[tuple[str, int], tuple[int, Any, Any]] = {}
+        # (service, sequence) -> (stand-in, the provider's request id, the service's spelling)
+        self._to_dds: dict[tuple[str, int], tuple[int, JsonValue, JsonValue]] = {}
         self._calls = 0
         self._refused: set[str] = set()
 
@@ -82,7 +86,8 @@ class ServiceMirror:
                 changed |= self._adopt(service)
         return changed
 
-    def _open(self, kind: type, name: str, type_name: str, received: Callable) -> Any:
+    def _open(self, kind: type[EndpointT], name: str, type_name: str,
+              received: Received) -> EndpointT | None:
         try:
             return kind(self._participant, self._pump, self._outbox, self._registry, name,
                         type_name, lambda *args: self._to_loop(received, *args))
@@ -130,8 +135,8 @@ class ServiceMirror:
             self._internal.pop(stand_in, None)
         return True
 
-    def _send(self, client_id: int, op: dict[str, Any]) -> None:
-        self._apply(self._core.receive_decoded(client_id, op, time.time_ns()))
+    def _send(self, client_id: int, op: JsonObject) -> None:
+        self._apply(self._core.receive_op(client_id, op, time.time_ns()))
 
     def guids(self) -> tuple[list[bytes], list[bytes]]:
         """(reader GUIDs, writer GUIDs) of every service endpoint."""
@@ -145,7 +150,7 @@ class ServiceMirror:
 
     # -- DDS clients calling local providers ------------------------------------------------
 
-    def _on_request(self, service: str, request: RequestId, msg: dict[str, Any]) -> None:
+    def _on_request(self, service: str, request: RequestId, msg: Message) -> None:
         server = self.servers.get(service)
         if server is None:
             return
@@ -182,7 +187,7 @@ class ServiceMirror:
         self._to_dds[(client.service, request.sequence)] = (
             send.client_id, payload.get("id"), payload.get("service"))
 
-    def _on_reply(self, service: str, request: RequestId, msg: dict[str, Any]) -> None:
+    def _on_reply(self, service: str, request: RequestId, msg: Message) -> None:
         waiting = self._to_dds.pop((service, request.sequence), None)
         if waiting is None:
             return

@@ -11,7 +11,6 @@ from __future__ import annotations
 import logging
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
 
 from bridge.dds.naming import topic_to_dds
 from bridge.dds.outbox import Outbox
@@ -21,6 +20,7 @@ from bridge.outgoing import TopicMessage
 from schemas.codec_cdr import from_cdr, to_cdr
 from schemas.errors import SchemaError
 from schemas.registry import TypeRegistry
+from schemas.values import Message
 
 logger = logging.getLogger("bridge.dds")
 
@@ -39,7 +39,7 @@ class Arrival:
 
     topic: str
     type_name: str
-    msg: dict[str, Any]
+    msg: Message
     cdr: bytes
     writer_guid: bytes | None
 

@@ -8,39 +8,50 @@ that cannot be served end at once with `action_result` `result: false`.
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Literal
 
 from bridge.context import Context, PendingGoal
 from bridge.errors import BridgeError, OpFailure
 from bridge.graph import ActionEntry
 from bridge.names import absolute_name, allowed
+from bridge.ops import route
 from bridge.session import ClientSession
 from schemas.errors import SchemaError
 from schemas.message import normalize
+from schemas.ops import (
+    ActionFeedback,
+    ActionResult,
+    AdvertiseAction,
+    CancelActionGoal,
+    SendActionGoal,
+    UnadvertiseAction,
+)
 from schemas.specs import MessageSpec
 from schemas.typenames import is_valid_type_name, normalize_type_name
+from schemas.values import JsonObject, JsonValue, OpId
 
-STATUS_SUCCEEDED = 4
 STATUS_ABORTED = 6  # action_msgs/GoalStatus
 
 
-def fail_goal(ctx: Context, caller: int, action: str, caller_id: Any, reason: str) -> None:
+def fail_goal(ctx: Context, caller: int, action: str, caller_id: OpId, reason: str) -> None:
     """End a caller's goal with `result: false`, status ABORTED and the reason as values."""
-    payload: dict[str, Any] = {"op": "action_result", "action": action, "values": reason,
+    payload: JsonObject = {"op": "action_result", "action": action, "values": reason,
                                "status": STATUS_ABORTED, "result": False}
     if caller_id is not None:
         payload["id"] = caller_id
     ctx.send(caller, payload)
 
 
-def action_spec_part(ctx: Context, type_name: str | None, part: str) -> MessageSpec | None:
+def action_spec_part(ctx: Context, type_name: str | None,
+                     part: Literal["goal", "result", "feedback"]) -> MessageSpec | None:
     """goal/result/feedback spec of a known action type, else None (relayed untyped)."""
     if type_name is None or not ctx.state.registry.has_action(type_name):
         return None
-    return getattr(ctx.state.registry.action(type_name), part)
+    spec: MessageSpec = getattr(ctx.state.registry.action(type_name), part)
+    return spec
 
 
-def filled(ctx: Context, spec: MessageSpec | None, raw: Any) -> Any:
+def filled(ctx: Context, spec: MessageSpec | None, raw: JsonValue) -> JsonValue:
     if spec is None:
         return {} if raw is None else raw
     if isinstance(raw, list):
@@ -51,7 +62,7 @@ def filled(ctx: Context, spec: MessageSpec | None, raw: Any) -> Any:
         raise OpFailure(str(exc)) from exc
 
 
-def handle_send_action_goal(ctx: Context, session: ClientSession, op: Any) -> None:
+def handle_send_action_goal(ctx: Context, session: ClientSession, op: SendActionGoal) -> None:
     try:
         forward_goal(ctx, session, op)
     except (BridgeError, SchemaError) as exc:
@@ -67,7 +78,7 @@ def action_name(ctx: Context, raw: str) -> str:
     return name
 
 
-def forward_goal(ctx: Context, session: ClientSession, op: Any) -> None:
+def forward_goal(ctx: Context, session: ClientSession, op: SendActionGoal) -> None:
     name = action_name(ctx, op.action)
     entry = ctx.state.graph.actions.get(name)
     provider = ctx.state.session_of_node(entry.provider) if entry else None
@@ -78,36 +89,39 @@ def forward_goal(ctx: Context, session: ClientSession, op: Any) -> None:
     entry.goals_sent += 1
     goal_id = f"action_goal:{entry.spelling}:{entry.goals_sent}"
     ctx.state.pending_goals[goal_id] = PendingGoal(
-        name, provider.client_id, session.client_id, op.id, op.action, bool(op.feedback))
+        name, provider.client_id, session.client_id, op.id, op.action, op.feedback)
     ctx.send(provider.client_id, {"op": "send_action_goal", "id": goal_id,
                                   "action": entry.spelling, "action_type": type_name,
                                   "args": args, "feedback": True})
 
 
-def provider_goal(ctx: Context, session: ClientSession, goal_id: Any) -> PendingGoal:
-    pending = ctx.state.pending_goals.get(goal_id) if isinstance(goal_id, str) else None
-    if pending is None or pending.provider != session.client_id:
-        raise OpFailure(f"no pending goal with id {goal_id!r} for this provider")
-    return pending
+def provider_goal(ctx: Context, session: ClientSession,
+                  goal_id: OpId) -> tuple[str, PendingGoal]:
+    """The goal `goal_id` this provider was sent (its key and entry), else OpFailure."""
+    if isinstance(goal_id, str):
+        pending = ctx.state.pending_goals.get(goal_id)
+        if pending is not None and pending.provider == session.client_id:
+            return goal_id, pending
+    raise OpFailure(f"no pending goal with id {goal_id!r} for this provider")
 
 
-def handle_action_feedback(ctx: Context, session: ClientSession, op: Any) -> None:
-    pending = provider_goal(ctx, session, op.id)
+def handle_action_feedback(ctx: Context, session: ClientSession, op: ActionFeedback) -> None:
+    _goal_id, pending = provider_goal(ctx, session, op.id)
     if not pending.feedback:
         return
     entry = ctx.state.graph.actions.get(pending.action)
     values = filled(ctx, action_spec_part(ctx, entry.type_name if entry else None,
                                           "feedback"), op.values)
-    payload: dict[str, Any] = {"op": "action_feedback", "action": pending.caller_action,
+    payload: JsonObject = {"op": "action_feedback", "action": pending.caller_action,
                                "values": values}
     if pending.caller_id is not None:
         payload["id"] = pending.caller_id
     ctx.send(pending.caller, payload)
 
 
-def handle_action_result(ctx: Context, session: ClientSession, op: Any) -> None:
-    pending = provider_goal(ctx, session, op.id)
-    del ctx.state.pending_goals[op.id]
+def handle_action_result(ctx: Context, session: ClientSession, op: ActionResult) -> None:
+    goal_id, pending = provider_goal(ctx, session, op.id)
+    del ctx.state.pending_goals[goal_id]
     if op.result is False or isinstance(op.values, str):
         reason = op.values if isinstance(op.values, str) else "Action provider reported failure"
         fail_goal(ctx, pending.caller, pending.caller_action, pending.caller_id, reason)
@@ -120,15 +134,15 @@ def handle_action_result(ctx: Context, session: ClientSession, op: Any) -> None:
         ctx.problem(session, "action_result", op.id, str(exc))
         fail_goal(ctx, pending.caller, pending.caller_action, pending.caller_id, str(exc))
         return
-    status = op.status if isinstance(op.status, int) else STATUS_SUCCEEDED
-    payload: dict[str, Any] = {"op": "action_result", "action": pending.caller_action,
-                               "values": values, "status": status, "result": True}
+    payload: JsonObject = {"op": "action_result", "action": pending.caller_action,
+                           "values": values, "status": op.status, "result": True}
     if pending.caller_id is not None:
         payload["id"] = pending.caller_id
     ctx.send(pending.caller, payload)
 
 
-def handle_cancel_action_goal(ctx: Context, session: ClientSession, op: Any) -> None:
+def handle_cancel_action_goal(ctx: Context, session: ClientSession,
+                              op: CancelActionGoal) -> None:
     """Forward the caller's cancel; the provider's eventual result reports CANCELED."""
     for goal_id, pending in ctx.state.pending_goals.items():
         if pending.caller == session.client_id and pending.caller_id == op.id:
@@ -140,7 +154,8 @@ def handle_cancel_action_goal(ctx: Context, session: ClientSession, op: Any) -> 
     raise OpFailure(f"no pending goal with id {op.id!r} to cancel")
 
 
-def handle_advertise_action(ctx: Context, session: ClientSession, op: Any) -> None:
+def handle_advertise_action(ctx: Context, session: ClientSession,
+                            op: AdvertiseAction) -> None:
     name = action_name(ctx, op.action)
     if name in ctx.state.graph.actions:
         remove_action(ctx, name, f"Action {name} was advertised again by another provider")
@@ -149,7 +164,8 @@ def handle_advertise_action(ctx: Context, session: ClientSession, op: Any) -> No
     session.actions.add(name)
 
 
-def handle_unadvertise_action(ctx: Context, session: ClientSession, op: Any) -> None:
+def handle_unadvertise_action(ctx: Context, session: ClientSession,
+                              op: UnadvertiseAction) -> None:
     name = absolute_name(op.action)
     entry = ctx.state.graph.actions.get(name)
     if entry is None or entry.provider != session.node:
@@ -182,11 +198,11 @@ def release_client(ctx: Context, session: ClientSession) -> None:
                                             "action": entry.spelling})
 
 
-HANDLERS = {
-    "send_action_goal": handle_send_action_goal,
-    "cancel_action_goal": handle_cancel_action_goal,
-    "action_feedback": handle_action_feedback,
-    "action_result": handle_action_result,
-    "advertise_action": handle_advertise_action,
-    "unadvertise_action": handle_unadvertise_action,
-}
+ROUTES = (
+    route(SendActionGoal, handle_send_action_goal),
+    route(CancelActionGoal, handle_cancel_action_goal),
+    route(ActionFeedback, handle_action_feedback),
+    route(ActionResult, handle_action_result),
+    route(AdvertiseAction, handle_advertise_action),
+    route(UnadvertiseAction, handle_unadvertise_action),
+)

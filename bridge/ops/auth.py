@@ -8,17 +8,17 @@ Without a secret the op is accepted and ignored (ROS 2 rosbridge has no authenti
 
 from __future__ import annotations
 
-from typing import Any
-
 from bridge.context import Context
+from bridge.ops import route
 from bridge.session import ClientSession, StatusLevel
 from schemas import rosauth
+from schemas.ops import Auth
 
 NS_PER_S = 1_000_000_000
 POLICY_VIOLATION = 1008  # RFC 6455 close code
 
 
-def handle_auth(ctx: Context, session: ClientSession, op: Any) -> None:
+def handle_auth(ctx: Context, session: ClientSession, op: Auth) -> None:
     secret = ctx.state.config.auth_secret
     if secret is None:
         ctx.problem(session, "auth", op.id, "authentication is not enabled on this bridge; "
@@ -38,4 +38,4 @@ def handle_auth(ctx: Context, session: ClientSession, op: Any) -> None:
                 f"{op.level!r})", StatusLevel.INFO)
 
 
-HANDLERS = {"auth": handle_auth}
+ROUTES = (route(Auth, handle_auth),)

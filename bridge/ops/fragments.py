@@ -1,46 +1,28 @@
 """Inbound `fragment` ops: reassemble by id and num, expire after the fragment timeout.
 
 Pieces are joined sorted by `num` (the reference joins in arrival order, protocol §2.10);
-`total` may be an int or the reference's float (floored). A list that waits longer than
-`fragment_timeout_s` is discarded with a log line. All of a client's incomplete lists
+`total` may be an int or the reference's float (the model floors it). A list that waits
+longer than `fragment_timeout_s` is discarded with a log line. All of a client's incomplete lists
 together may hold at most the inbound frame limit; past it the client is closed with 1009,
 as for one oversized frame, so fragments cannot be used to get around the limit.
 """
 
 from __future__ import annotations
 
-import math
-from typing import Any
-
 from bridge.context import Context
 from bridge.errors import OpFailure
+from bridge.ops import route
 from bridge.session import ClientSession, FragmentBuffer, StatusLevel
+from schemas.ops import Fragment
 
 NS_PER_S = 1_000_000_000
 MESSAGE_TOO_BIG = 1009  # RFC 6455 close code, as websockets uses for an oversized frame
 
 
-def fragment_total(raw: Any) -> int:
-    if isinstance(raw, bool) or not isinstance(raw, int | float) or not math.isfinite(raw):
-        raise OpFailure(f"fragment total must be a number, got {raw!r}")
-    total = int(raw)
-    if total < 1:
-        raise OpFailure(f"fragment total must be at least 1, got {raw!r}")
-    return total
-
-
-def fragment_key(raw: Any) -> str | int:
-    if isinstance(raw, bool) or not isinstance(raw, str | int):
-        raise OpFailure(f"fragment id must be a string or an integer, got {raw!r}")
-    return raw
-
-
-def handle_fragment(ctx: Context, session: ClientSession, op: Any) -> None:
-    key, total = fragment_key(op.id), fragment_total(op.total)
-    if isinstance(op.num, bool) or not isinstance(op.num, int) or not 0 <= op.num < total:
+def handle_fragment(ctx: Context, session: ClientSession, op: Fragment) -> None:
+    key, total = op.id, op.total
+    if not 0 <= op.num < total:
         raise OpFailure(f"fragment num {op.num!r} outside 0..{total - 1}")
-    if not isinstance(op.data, str):
-        raise OpFailure("fragment data must be a string")
     buffer = session.fragments.get(key)
     if buffer is None:
         expires = ctx.now_ns + int(ctx.state.config.fragment_timeout_s * NS_PER_S)
@@ -76,4 +58,4 @@ def on_fragment_deadline(ctx: Context, client_id: int, key: str | int) -> None:
                 f"{len(buffer.pieces)} of {buffer.total} fragments")
 
 
-HANDLERS = {"fragment": handle_fragment}
+ROUTES = (route(Fragment, handle_fragment),)

@@ -2,19 +2,14 @@
 
 from __future__ import annotations
 
-from typing import Any
-
 from bridge.context import Context
-from bridge.errors import OpFailure
+from bridge.ops import route
 from bridge.session import ClientSession, StatusLevel
+from schemas.ops import SetLevel
 
 
-def handle_set_level(ctx: Context, session: ClientSession, op: Any) -> None:
-    level = op.level.lower() if isinstance(op.level, str) else None
-    try:
-        session.status_level = StatusLevel[(level or "").upper()]
-    except KeyError as exc:
-        raise OpFailure(f"level must be info, warning, error or none, got {op.level!r}") from exc
+def handle_set_level(ctx: Context, session: ClientSession, op: SetLevel) -> None:
+    session.status_level = StatusLevel[op.level.upper()]  # the model allows only the four
 
 
-HANDLERS = {"set_level": handle_set_level}
+ROUTES = (route(SetLevel, handle_set_level),)

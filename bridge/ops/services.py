@@ -9,33 +9,39 @@ when the service is unknown, the call times out, or the provider unadvertises or
 
 from __future__ import annotations
 
-from typing import Any
-
 from bridge.context import Context, PendingCall
 from bridge.errors import BridgeError, OpFailure
 from bridge.graph import ServiceEntry
 from bridge.names import absolute_name, allowed
+from bridge.ops import route
 from bridge.session import ClientSession
 from schemas.errors import SchemaError
 from schemas.message import normalize
-from schemas.ops import MAX_TIMEOUT_S
+from schemas.ops import (
+    MAX_TIMEOUT_S,
+    AdvertiseService,
+    CallService,
+    ServiceResponse,
+    UnadvertiseService,
+)
 from schemas.specs import MessageSpec
 from schemas.typenames import is_valid_type_name, normalize_type_name
+from schemas.values import JsonObject, JsonValue, Message, OpId
 
 NS_PER_S = 1_000_000_000
 
 
-def respond(ctx: Context, caller: int, service: str, call_id: Any, values: Any,
+def respond(ctx: Context, caller: int, service: str, call_id: OpId, values: JsonValue,
             result: bool) -> None:
     """Send the caller its `service_response`, echoing its service string and id."""
-    payload: dict[str, Any] = {"op": "service_response", "service": service,
+    payload: JsonObject = {"op": "service_response", "service": service,
                                "values": values, "result": result}
     if call_id is not None:
         payload["id"] = call_id
     ctx.send(caller, payload)
 
 
-def fill_message(ctx: Context, spec: MessageSpec, raw: Any) -> dict[str, Any]:
+def fill_message(ctx: Context, spec: MessageSpec, raw: JsonValue) -> Message:
     """Validate and complete request/response fields; a list is positional (protocol §2.6)."""
     if isinstance(raw, list):
         names = [f.name for f in spec.fields]
@@ -50,21 +56,21 @@ def fill_message(ctx: Context, spec: MessageSpec, raw: Any) -> dict[str, Any]:
         raise OpFailure(str(exc)) from exc
 
 
-def request_fields(ctx: Context, type_name: str | None, raw: Any) -> Any:
+def request_fields(ctx: Context, type_name: str | None, raw: JsonValue) -> JsonValue:
     """Request args filled against the service type if it is known, else relayed as sent."""
     if type_name is not None and ctx.state.registry.has_service(type_name):
         return fill_message(ctx, ctx.state.registry.service(type_name).request, raw)
     return {} if raw is None else raw
 
 
-def service_type_name(ctx: Context, raw: Any) -> str | None:
+def service_type_name(ctx: Context, raw: str) -> str | None:
     """Canonical `pkg/srv/T` when the type is well formed, else None (relayed untyped)."""
     if not is_valid_type_name(raw):
         return None
     return normalize_type_name(raw, "srv")
 
 
-def handle_call_service(ctx: Context, session: ClientSession, op: Any) -> None:
+def handle_call_service(ctx: Context, session: ClientSession, op: CallService) -> None:
     name_part, _, suffix = op.service.partition("#")
     call_id = op.id if op.id is not None else (suffix or None)
     try:
@@ -78,8 +84,8 @@ def handle_call_service(ctx: Context, session: ClientSession, op: Any) -> None:
         respond(ctx, session.client_id, op.service, call_id, values, True)
 
 
-def call(ctx: Context, session: ClientSession, name: str, op: Any,
-         call_id: Any) -> dict[str, Any] | None:
+def call(ctx: Context, session: ClientSession, name: str, op: CallService,
+         call_id: OpId) -> Message | None:
     """Answer a rosapi call (returns its values) or forward it to a provider (returns None)."""
     rosapi = ctx.state.rosapi.get(name)
     if rosapi is not None:
@@ -103,7 +109,8 @@ def call(ctx: Context, session: ClientSession, name: str, op: Any,
     return None
 
 
-def take_pending(ctx: Context, session: ClientSession, request_id: Any) -> PendingCall | None:
+def take_pending(ctx: Context, session: ClientSession,
+                 request_id: JsonValue) -> PendingCall | None:
     """Remove and return the call `request_id` if this client is the one answering it."""
     pending = ctx.state.pending_calls.get(request_id) if isinstance(request_id, str) else None
     if pending is None or pending.provider != session.client_id:
@@ -112,7 +119,8 @@ def take_pending(ctx: Context, session: ClientSession, request_id: Any) -> Pendi
     return pending
 
 
-def handle_service_response(ctx: Context, session: ClientSession, op: Any) -> None:
+def handle_service_response(ctx: Context, session: ClientSession,
+                            op: ServiceResponse) -> None:
     pending = take_pending(ctx, session, op.id)
     if pending is None:
         raise OpFailure("Received service response for unrecognized id "
@@ -120,8 +128,8 @@ def handle_service_response(ctx: Context, session: ClientSession, op: Any) -> No
     settle(ctx, session, pending, op.values, op.result)
 
 
-def settle(ctx: Context, session: ClientSession, pending: PendingCall, values: Any,
-           result: Any) -> None:
+def settle(ctx: Context, session: ClientSession, pending: PendingCall, values: JsonValue,
+           result: bool) -> None:
     """Answer the caller from a provider's `values` and `result` (see `response_values`)."""
     entry = ctx.state.graph.services.get(pending.service)
     try:
@@ -133,7 +141,7 @@ def settle(ctx: Context, session: ClientSession, pending: PendingCall, values: A
     finish(ctx, pending, answer, not isinstance(answer, str))
 
 
-def settle_unparsed_response(ctx: Context, session: ClientSession, message: dict[str, Any],
+def settle_unparsed_response(ctx: Context, session: ClientSession, message: JsonObject,
                              problem: str) -> None:
     """A provider's response that failed validation still ends its caller's wait at once.
 
@@ -150,8 +158,8 @@ def settle_unparsed_response(ctx: Context, session: ClientSession, message: dict
         finish(ctx, pending, f"Service {pending.service} answered badly: {problem}", False)
 
 
-def response_values(ctx: Context, entry: ServiceEntry | None, values: Any,
-                    result: Any) -> dict[str, Any] | str:
+def response_values(ctx: Context, entry: ServiceEntry | None, values: JsonValue,
+                    result: bool) -> Message | str:
     """The values to return: an object means success; a string or `result: false` failure."""
     if isinstance(values, str):
         return values
@@ -164,7 +172,7 @@ def response_values(ctx: Context, entry: ServiceEntry | None, values: Any,
     return values or {}
 
 
-def finish(ctx: Context, pending: PendingCall, values: Any, result: bool) -> None:
+def finish(ctx: Context, pending: PendingCall, values: JsonValue, result: bool) -> None:
     respond(ctx, pending.caller, pending.caller_service, pending.caller_id, values, result)
 
 
@@ -176,7 +184,8 @@ def fail_calls(ctx: Context, service: str, reason: str) -> None:
             finish(ctx, pending, reason, False)
 
 
-def handle_advertise_service(ctx: Context, session: ClientSession, op: Any) -> None:
+def handle_advertise_service(ctx: Context, session: ClientSession,
+                             op: AdvertiseService) -> None:
     name = absolute_name(op.service)
     if name in ctx.state.rosapi:
         raise OpFailure(f"Service {name} is provided by the bridge itself")
@@ -193,7 +202,8 @@ def handle_advertise_service(ctx: Context, session: ClientSession, op: Any) -> N
     session.services.add(name)
 
 
-def handle_unadvertise_service(ctx: Context, session: ClientSession, op: Any) -> None:
+def handle_unadvertise_service(ctx: Context, session: ClientSession,
+                               op: UnadvertiseService) -> None:
     name = absolute_name(op.service)
     entry = ctx.state.graph.services.get(name)
     if entry is None or entry.provider != session.node:
@@ -224,9 +234,9 @@ def on_call_deadline(ctx: Context, request_id: str) -> None:
                              f"{pending.timeout_s:g} s", False)
 
 
-HANDLERS = {
-    "call_service": handle_call_service,
-    "advertise_service": handle_advertise_service,
-    "unadvertise_service": handle_unadvertise_service,
-    "service_response": handle_service_response,
-}
+ROUTES = (
+    route(CallService, handle_call_service),
+    route(AdvertiseService, handle_advertise_service),
+    route(UnadvertiseService, handle_unadvertise_service),
+    route(ServiceResponse, handle_service_response),
+)

@@ -2,17 +2,25 @@
 
 from __future__ import annotations
 
-from typing import Any
-
 from bridge.context import Context
 from bridge.errors import GraphConflictError, OpFailure
-from bridge.inbound import PreparedMessage
+from bridge.graph import TopicEntry
 from bridge.names import absolute_name, allowed
+from bridge.ops import Route, route
 from bridge.outgoing import MIN_FRAGMENT_SIZE, TopicMessage
 from bridge.session import ClientSession
 from bridge.subscription import SubscribeSettings, Subscription
+from bridge.validation import CheckedMessage, InvalidMessage, check_message
 from schemas.errors import SchemaError
-from schemas.message import normalize
+from schemas.ops import (
+    Advertise,
+    PublishFields,
+    Subscribe,
+    Unadvertise,
+    Unsubscribe,
+    parse_publish,
+)
+from schemas.specs import MessageSpec
 
 
 def topic_name(ctx: Context, raw: str) -> str:
@@ -38,71 +46,78 @@ def declare(ctx: Context, name: str, type_name: str) -> None:
         raise OpFailure(str(exc)) from exc
 
 
-def id_key(raw: Any) -> Any:
-    """Ids may be any JSON value; unhashable ones (objects, lists) are keyed by their repr."""
-    return raw if raw is None or isinstance(raw, str | int | float | bool) else repr(raw)
 
 
-def handle_advertise(ctx: Context, session: ClientSession, op: Any) -> None:
+def handle_advertise(ctx: Context, session: ClientSession, op: Advertise) -> None:
     name = topic_name(ctx, op.topic)
     declare(ctx, name, message_type(ctx, op.type))
-    entry = ctx.state.graph.add_publisher(name, session.node, id_key(op.id), op.latch)
+    entry = ctx.state.graph.add_publisher(name, session.node, op.id, op.latch)
     if op.qos:
         entry.qos[session.node] = op.qos
     session.published.add(name)
 
 
-def handle_unadvertise(ctx: Context, session: ClientSession, op: Any) -> None:
+def handle_unadvertise(ctx: Context, session: ClientSession, op: Unadvertise) -> None:
     name = topic_name(ctx, op.topic)
-    ctx.state.graph.remove_publisher(name, session.node, id_key(op.id),
+    ctx.state.graph.remove_publisher(name, session.node, op.id,
                                      every_id=op.id is None)
     entry = ctx.state.graph.topics.get(name)
     if entry is None or session.node not in entry.publishers:
         session.published.discard(name)
 
 
-def handle_publish(ctx: Context, session: ClientSession, op: Any) -> None:
+def handle_publish(ctx: Context, session: ClientSession, op: PublishFields) -> None:
     name = topic_name(ctx, op.topic)
-    graph = ctx.state.graph
-    entry = graph.topics.get(name)
-    if op.type is not None:
-        declare(ctx, name, message_type(ctx, op.type))
-        entry = graph.topics[name]
-    if entry is None or entry.type_name is None:
-        raise OpFailure(f"Cannot infer topic type for topic {name} as it is not yet advertised")
-    if session.node not in entry.publishers:
-        graph.add_publisher(name, session.node, id_key(op.id), op.latch)
-        session.published.add(name)
-    elif op.latch:
-        entry.latching.add(session.node)
-    spec = ctx.state.registry.message(entry.type_name)
-    prepared = op.msg if isinstance(op.msg, PreparedMessage) and op.msg.spec is spec else None
-    if prepared is not None:
-        message = TopicMessage(name, entry.type_name, dict(prepared), ctx.now_ns,
-                               ctx.state.registry, size_hint=prepared.size_hint,
-                               cdr_bytes=prepared.cdr_bytes)
-    else:
-        try:
-            msg = normalize(spec, {} if op.msg is None else op.msg, now_ns=ctx.now_ns)
-        except SchemaError as exc:
-            raise OpFailure(f"message dropped: {exc}") from exc
-        message = TopicMessage(name, entry.type_name, msg, ctx.now_ns, ctx.state.registry)
+    entry, type_name = publishing_entry(ctx, session, name, op)
+    checked = checked_message(ctx, ctx.state.registry.message(type_name), op)
+    if isinstance(checked, InvalidMessage):
+        raise OpFailure(f"message dropped: {checked.problem}")
+    message = TopicMessage(name, checked.spec.name, checked.msg, ctx.now_ns,
+                           ctx.state.registry, size_hint=checked.size_hint,
+                           cdr_bytes=checked.cdr_bytes)
     if session.node in entry.latching:
         entry.latched = message
     ctx.publish(message, session.node)
 
 
-def subscribe_settings(op: Any) -> SubscribeSettings:
+def publishing_entry(ctx: Context, session: ClientSession, name: str,
+                     op: PublishFields) -> tuple[TopicEntry, str]:
+    """The topic `op` publishes on and its type, with the client among its publishers."""
+    graph = ctx.state.graph
+    if op.type is not None:
+        declare(ctx, name, message_type(ctx, op.type))
+    entry = graph.topics.get(name)
+    if entry is None or entry.type_name is None:
+        raise OpFailure(f"Cannot infer topic type for topic {name} as it is not yet advertised")
+    if session.node not in entry.publishers:
+        graph.add_publisher(name, session.node, op.id, op.latch)
+        session.published.add(name)
+    elif op.latch:
+        entry.latching.add(session.node)
+    return entry, entry.type_name
+
+
+def checked_message(ctx: Context, spec: MessageSpec, op: PublishFields) -> CheckedMessage:
+    """The message of `op` checked against `spec`: the check its frame brought from a worker
+    (`BridgeCore.offload`) if it was against this very type, else one made now."""
+    frame = ctx.frame
+    if frame is not None and frame.checked is not None and frame.checked.spec is spec:
+        return frame.checked
+    return check_message(spec, op.msg, wire_bytes=frame.wire_bytes if frame else 0,
+                         now_ns=ctx.now_ns)
+
+
+def subscribe_settings(op: Subscribe) -> SubscribeSettings:
     fragment_size = op.fragment_size if op.fragment_size and op.fragment_size > 0 else None
     return SubscribeSettings(
-        throttle_ms=max(0, op.throttle_rate or 0),
-        queue_length=max(0, op.queue_length or 0),
+        throttle_ms=max(0, op.throttle_rate),
+        queue_length=max(0, op.queue_length),
         fragment_size=None if fragment_size is None else max(fragment_size, MIN_FRAGMENT_SIZE),
         compression=SubscribeSettings.known_compression(op.compression),
     )
 
 
-def handle_subscribe(ctx: Context, session: ClientSession, op: Any) -> None:
+def handle_subscribe(ctx: Context, session: ClientSession, op: Subscribe) -> None:
     name = topic_name(ctx, op.topic)
     graph = ctx.state.graph
     if op.type is not None:
@@ -117,14 +132,14 @@ def handle_subscribe(ctx: Context, session: ClientSession, op: Any) -> None:
         ctx.state.topic_subscriptions.setdefault(name, {})[session.client_id] = subscription
         graph.add_subscriber(name, session.node)
     subscription.spelling = op.topic
-    subscription.set_id(id_key(op.id), subscribe_settings(op))
+    subscription.set_id(op.id, subscribe_settings(op))
     if is_new and entry.latched is not None:
         ctx.release(session, subscription, subscription.offer(entry.latched, ctx.now_ns))
     else:
         ctx.release(session, subscription, subscription.release(ctx.now_ns))
 
 
-def handle_unsubscribe(ctx: Context, session: ClientSession, op: Any) -> None:
+def handle_unsubscribe(ctx: Context, session: ClientSession, op: Unsubscribe) -> None:
     name = absolute_name(op.topic)
     subscription = session.subscriptions.get(name)
     if subscription is None:
@@ -132,7 +147,7 @@ def handle_unsubscribe(ctx: Context, session: ClientSession, op: Any) -> None:
     if op.id is None:
         subscription.ids.clear()
     else:
-        subscription.remove_id(id_key(op.id))
+        subscription.remove_id(op.id)
     if not subscription.ids:
         drop_subscription(ctx, session, name)
     else:
@@ -166,10 +181,10 @@ def on_release_deadline(ctx: Context, client_id: int, topic: str) -> None:
         ctx.release(session, subscription, subscription.release(ctx.now_ns))
 
 
-HANDLERS = {
-    "advertise": handle_advertise,
-    "unadvertise": handle_unadvertise,
-    "publish": handle_publish,
-    "subscribe": handle_subscribe,
-    "unsubscribe": handle_unsubscribe,
-}
+ROUTES = (
+    route(Advertise, handle_advertise),
+    route(Unadvertise, handle_unadvertise),
+    Route("publish", parse_publish, handle_publish),  # the fast reader of the busiest op
+    route(Subscribe, handle_subscribe),
+    route(Unsubscribe, handle_unsubscribe),
+)

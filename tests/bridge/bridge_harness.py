@@ -4,11 +4,13 @@ from __future__ import annotations
 
 import json
 from collections import defaultdict
+from dataclasses import replace
 from typing import Any
 
 from bridge.config import BridgeConfig
 from bridge.core import BridgeCore
 from bridge.effects import Close, Effect, Schedule, Send
+from bridge.inbound import read_frame
 from bridge.outgoing import WireFrame, render
 from schemas import codec_cbor, codec_json
 from schemas.errors import SchemaError
@@ -40,16 +42,20 @@ class CoreHarness:
     def send(self, client: int, op: dict[str, Any] | bytes | str) -> None:
         """Deliver one frame from `client`: a dict goes as a JSON text frame."""
         data = json.dumps(op) if isinstance(op, dict) else op
-        self._record(self.core.receive(client, data, self.now_ns))
+        self._record(self.core.receive(client, data, self.now_ns, self.now_ns))
 
-    def receive_prepared(self, client: int, frame: bytes | str) -> None:
-        """Deliver a frame the way the edge does for large ones: prepare, then handle."""
+    def receive_offloaded(self, client: int, frame: bytes | str) -> None:
+        """Deliver a frame the way the edge does: decode it, run the check the core wants off
+        the loop (`offload`; here, at once), then hand both to the core."""
         try:
-            prepared = self.core.prepare(frame, self.now_ns)
+            inbound = read_frame(frame, self.now_ns)
         except SchemaError as exc:
             self._record(self.core.receive_invalid(client, str(exc), self.now_ns))
             return
-        self._record(self.core.receive_decoded(client, prepared, self.now_ns))
+        work = self.core.offload(inbound, self.now_ns)
+        if work is not None:
+            inbound = replace(inbound, checked=work.run())
+        self._record(self.core.receive_frame(client, inbound, self.now_ns))
 
     def advance(self, seconds: float) -> None:
         """Move the clock, firing due deadlines in time order."""

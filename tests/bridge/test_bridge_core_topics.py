@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 from bridge_harness import CoreHarness
 
@@ -284,59 +286,81 @@ def test_unadvertise_by_id_keeps_other_ids(harness):
     assert "/chatter" not in harness.state.graph.topics
 
 
-def test_prepare_converts_large_publishes_off_loop_and_handle_revalidates(harness):
+def test_a_large_publish_is_checked_off_the_loop_and_refused_there_too(harness):
     import base64
     import json
+
+    from bridge.inbound import read_frame
+    from bridge.validation import InvalidMessage, ValidMessage
 
     pub, sub = harness.connect(), harness.connect()
     harness.send(sub, {"op": "subscribe", "topic": "/img", "type": "sensor_msgs/Image"})
     pixels = bytes(range(256)) * 16
-    frame = json.dumps({"op": "publish", "topic": "/img",
-                        "msg": {"data": base64.b64encode(pixels).decode(), "width": 64}})
-    assert harness.core.prepare(frame, harness.now_ns)["msg"]["data"] == pixels
-    harness.receive_prepared(pub, frame)
+    encoded = base64.b64encode(pixels).decode()
+    frame = json.dumps({"op": "publish", "topic": "/img", "msg": {"data": encoded, "width": 64}})
+    work = harness.core.offload(read_frame(frame, harness.now_ns), harness.now_ns)
+    assert work is not None, "5 kB of base64 is worth a worker"
+    checked = work.run()
+    assert isinstance(checked, ValidMessage) and checked.msg["data"] == pixels
+    harness.receive_offloaded(pub, frame)
     delivered = harness.outbox(sub)
     assert len(delivered) == 1
     assert base64.b64decode(delivered[0]["msg"]["data"]) == pixels
     assert delivered[0]["msg"]["width"] == 64
-    harness.receive_prepared(pub, json.dumps({"op": "publish", "topic": "/img",
-                                              "msg": {"width": "wide"}}))
+    bad = json.dumps({"op": "publish", "topic": "/img", "msg": {"data": encoded, "width": "x"}})
+    work = harness.core.offload(read_frame(bad, harness.now_ns), harness.now_ns)
+    assert work is not None and isinstance(work.run(), InvalidMessage)
+    harness.receive_offloaded(pub, bad)
     assert harness.outbox(sub) == []
+    small = json.dumps({"op": "publish", "topic": "/img", "msg": {"width": 1}})
+    assert harness.core.offload(read_frame(small, harness.now_ns), harness.now_ns) is None
 
 
-def test_a_prepared_publish_is_not_validated_again_and_keeps_its_sizes(harness):
+def test_a_publish_checked_off_the_loop_is_not_checked_again_and_keeps_its_sizes(registry):
     import json
 
-    from bridge.inbound import PreparedMessage
+    from bridge.inbound import read_frame
+    from bridge.validation import ValidMessage
     from schemas.codec_cdr import cdr_size
 
+    harness = CoreHarness(registry, offload_threshold_bytes=1)
     pub = harness.connect()
     advertise(harness, pub, topic="/fix", type_name="sensor_msgs/NavSatFix", latch=True)
-    frame = json.dumps({"op": "publish", "topic": "/fix", "latch": True, "msg": {
-        "header": {"stamp": {"sec": 3, "nanosec": 4}, "frame_id": "gnss"}, "latitude": 51.6}})
-    prepared = harness.core.prepare(frame, harness.now_ns)["msg"]
-    assert isinstance(prepared, PreparedMessage)
-    assert prepared.spec is harness.state.registry.message("sensor_msgs/msg/NavSatFix")
-    assert prepared.size_hint >= len(frame)
-    assert prepared.cdr_bytes == cdr_size(harness.state.registry, "sensor_msgs/msg/NavSatFix",
-                                          dict(prepared))
-    harness.receive_prepared(pub, frame)
+    frame = read_frame(json.dumps({"op": "publish", "topic": "/fix", "latch": True, "msg": {
+        "header": {"stamp": {"sec": 3, "nanosec": 4}, "frame_id": "gnss"}, "latitude": 51.6}}),
+        harness.now_ns)
+    work = harness.core.offload(frame, harness.now_ns)
+    assert work is not None and work.spec is registry.message("sensor_msgs/msg/NavSatFix")
+    checked = work.run()
+    assert isinstance(checked, ValidMessage)
+    assert checked.size_hint >= frame.wire_bytes
+    assert checked.cdr_bytes == cdr_size(registry, "sensor_msgs/msg/NavSatFix", checked.msg)
+    harness._record(harness.core.receive_frame(pub, replace(frame, checked=checked),
+                                               harness.now_ns))
     latched = harness.state.graph.topics["/fix"].latched
-    assert type(latched.msg) is dict and latched.msg["latitude"] == 51.6
-    assert (latched.size_hint, latched.cdr_bytes) == (prepared.size_hint, prepared.cdr_bytes)
+    assert latched.msg is checked.msg, "the worker's message is the one published"
+    assert (latched.size_hint, latched.cdr_bytes) == (checked.size_hint, checked.cdr_bytes)
 
 
-def test_a_prepared_publish_is_validated_again_when_the_topic_changed_type(harness):
+def test_a_publish_checked_off_the_loop_is_checked_again_when_the_topic_changed_type(
+        registry):
     import json
 
+    from bridge.inbound import read_frame
+
+    harness = CoreHarness(registry, offload_threshold_bytes=1)
     pub, sub = harness.connect(), harness.connect()
     advertise(harness, pub, topic="/t", type_name="std_msgs/String")
-    prepared = harness.core.prepare(
-        json.dumps({"op": "publish", "topic": "/t", "msg": {"data": "hello"}}), harness.now_ns)
+    frame = read_frame(json.dumps({"op": "publish", "topic": "/t", "msg": {"data": "hello"}}),
+                       harness.now_ns)
+    work = harness.core.offload(frame, harness.now_ns)
+    assert work is not None
+    checked = work.run()
     harness.send(pub, {"op": "unadvertise", "topic": "/t"})
     advertise(harness, pub, topic="/t", type_name="std_msgs/Int32")
     harness.send(sub, {"op": "subscribe", "topic": "/t"})
-    harness._record(harness.core.receive_decoded(pub, prepared, harness.now_ns))
+    harness._record(harness.core.receive_frame(pub, replace(frame, checked=checked),
+                                               harness.now_ns))
     assert harness.outbox(sub) == [], "a String is no Int32"
     publish(harness, pub, {"data": 7}, topic="/t")
     assert [m["msg"] for m in harness.outbox(sub)] == [{"data": 7}]

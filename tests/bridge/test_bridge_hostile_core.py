@@ -161,11 +161,13 @@ def test_log_lines_echo_client_input_short_and_on_one_line(harness, caplog_core)
 def test_a_bug_in_a_handler_costs_one_op_not_the_connection(harness, caplog_core,
                                                              monkeypatch):
     from bridge import core
+    from bridge.ops import route
+    from schemas.ops import CallService
 
-    def broken(ctx, session, op):
+    def broken(ctx, session, op: CallService) -> None:
         raise RuntimeError("boom")
 
-    monkeypatch.setitem(core.OP_HANDLERS, "call_service", broken)
+    monkeypatch.setitem(core.OP_ROUTES, "call_service", route(CallService, broken))
     caller = harness.connect()
     harness.send(caller, {"op": "call_service", "service": "/rosapi/topics", "id": "b"})
     [answer] = harness.outbox(caller)

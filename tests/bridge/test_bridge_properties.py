@@ -167,13 +167,13 @@ def test_hostile_values_get_answers_that_can_be_sent_and_one_short_line(registry
     logger = logging.getLogger("bridge.core")
     logger.addHandler(handler)
     try:
-        h = CoreHarness(registry)
+        h = CoreHarness(registry, offload_threshold_bytes=1)  # off_loop: every check offloaded
         clients = [h.connect() for _ in range(3)]
         h.send(clients[0], {"op": "set_level", "level": "info"})
         for op in SETUP_OPS:  # listeners and providers, so hostile values travel somewhere
             h.send(clients[2], op)
         for index, frame, off_loop in script:
-            (h.receive_prepared if off_loop else h.send)(clients[index], frame)
+            (h.receive_offloaded if off_loop else h.send)(clients[index], frame)
             for sends in h.sends.values():
                 for send in sends:
                     render(send.item, send.fragment_size, "f")  # every answer can be sent
@@ -208,11 +208,11 @@ def assert_nothing_left(h: CoreHarness) -> None:
 @given(script=st.lists(st.tuples(st.integers(0, 2), frames(), st.floats(0, 1), st.booleans()),
                        max_size=25))
 def test_core_survives_any_frames_and_leaks_nothing(registry, script):
-    h = CoreHarness(registry)
+    h = CoreHarness(registry, offload_threshold_bytes=1)  # off_loop: every check offloaded
     clients = [h.connect() for _ in range(3)]
     for index, frame, pause_s, off_loop in script:
         if off_loop:
-            h.receive_prepared(clients[index], frame)
+            h.receive_offloaded(clients[index], frame)
         else:
             h.send(clients[index], frame)
         h.advance(pause_s)
