@@ -98,7 +98,7 @@ def test_the_image_install_step_yields_a_working_package(tmp_path: Path) -> None
                      env=env, cwd=elsewhere)
     try:
         port = bridge.wait_for_line(r"listening on ws://127\.0\.0\.1:(?P<port>\d+)")["port"]
-        run(sys.executable, "-m", "clients.healthcheck", "--bridge", f"ws://127.0.0.1:{port}",
+        run(sys.executable, "-m", "clients.stack.healthcheck", "--bridge", f"ws://127.0.0.1:{port}",
             "--topic", "/rosout", cwd=elsewhere, env=env)
         assert bridge.stop() == 0, bridge.text()
     finally:

@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from clients.quality import (
+from clients.report.quality import (
     LAND,
     NO_RETURN,
     WATER,

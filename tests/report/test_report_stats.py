@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from clients.report import (
+from clients.report.stats import (
     RESULT,
     TRANSPORT,
     SpanRecord,
@@ -20,7 +20,7 @@ from clients.report import (
     spans_of_batch,
     summarise,
 )
-from clients.report_text import render_comparison, render_run
+from clients.report.text import render_comparison, render_run
 
 MS = 1_000_000
 TOPIC = "/lidar/points"
@@ -193,8 +193,8 @@ def test_tables_render_every_stage_and_the_comparison():
 
 
 def test_plots_are_written_per_run_and_topic(tmp_path):
-    from clients.report import by_topic, stage_values
-    from clients.report_plots import write_plots
+    from clients.report.plots import write_plots
+    from clients.report.stats import by_topic, stage_values
 
     spans = [s for k in range(5) for s in path_spans(10**18 + k * 500 * MS)]
     values = {t: stage_values(items) for t, items in by_topic(journeys(spans)).items()}

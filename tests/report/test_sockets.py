@@ -6,8 +6,8 @@ from __future__ import annotations
 import asyncio
 import os
 
-from clients.report_cli import read_sockets
-from clients.sockets import SocketBytes, parse_ss, window_traffic
+from clients.report.cli import read_sockets
+from clients.report.sockets import SocketBytes, parse_ss, window_traffic
 
 SS_TEXT = """\
 0      0      127.0.0.1:9090 127.0.0.1:50000 users:(("python3",pid=10,fd=16))

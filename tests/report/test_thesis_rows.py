@@ -5,8 +5,8 @@ from __future__ import annotations
 
 import pytest
 
-from clients.report import network_summary, summarise
-from clients.thesis import FIGURES, STATISTICS, thesis_comparison
+from clients.report.stats import network_summary, summarise
+from clients.report.thesis import FIGURES, STATISTICS, thesis_comparison
 
 from .test_report_stats import MS, path_spans
 

@@ -2,7 +2,7 @@
 
 For each payload profile and encoding (``--profile default,thesis --encoding cbor,json`` runs
 the four in turn) it starts bridge, simulator and navigation through
-:class:`clients.launcher.Supervisor`, lets them warm up, then reads ``/riverbridge/trace`` and
+:class:`clients.stack.launcher.Supervisor`, lets them warm up, then reads ``/riverbridge/trace`` and
 ``/riverbridge/process_stats`` for ``--duration`` seconds as an ordinary rosbridge client,
 together with navigation's outputs and the simulator's ground truth; it asks the bridge's
 ``/riverbridge/stats`` and reads the kernel's byte counters of the stack's sockets and of
@@ -37,14 +37,6 @@ import numpy as np
 
 from clients.client import RosbridgeClient
 from clients.errors import RosbridgeError
-from clients.launcher import (
-    SIMULATOR_TOPICS,
-    LaunchConfig,
-    PrefixedOutput,
-    Supervisor,
-    stack_components,
-)
-from clients.quality import lidar_quality, pair_by_stamp, radar_quality
 from clients.recording.components import (
     player_component,
     record_path,
@@ -54,7 +46,10 @@ from clients.recording.components import (
 from clients.recording.play_cli import recording_file
 from clients.recording.reading import recorded_topics
 from clients.recording.record_cli import output_file
-from clients.report import (
+from clients.report.plots import write_plots
+from clients.report.quality import lidar_quality, pair_by_stamp, radar_quality
+from clients.report.sockets import SS_COMMAND, SocketBytes, parse_ss, window_traffic
+from clients.report.stats import (
     SENSOR_TOPICS,
     SpanRecord,
     by_topic,
@@ -67,11 +62,16 @@ from clients.report import (
     stage_values,
     topic_summary,
 )
-from clients.report_plots import write_plots
-from clients.report_text import render_comparison, render_run, run_label
-from clients.sockets import SS_COMMAND, SocketBytes, parse_ss, window_traffic
-from clients.thesis import thesis_comparison
-from clients.up_cli import positive_seconds
+from clients.report.text import render_comparison, render_run, run_label
+from clients.report.thesis import thesis_comparison
+from clients.stack.launcher import (
+    SIMULATOR_TOPICS,
+    LaunchConfig,
+    PrefixedOutput,
+    Supervisor,
+    stack_components,
+)
+from clients.stack.up_cli import positive_seconds
 from schemas.catalogue import TOPICS
 from schemas.tracing import (
     NS_PER_S,
@@ -151,7 +151,7 @@ async def read_sockets() -> list[SocketBytes] | None:
 
 def stack_sockets(before: list[SocketBytes] | None, after: list[SocketBytes] | None,
                   processes: dict[str, dict[str, Any]]) -> dict[str, Any] | None:
-    """What the stack's processes' sockets sent in the window (clients.sockets)."""
+    """What the stack's processes' sockets sent in the window (clients.report.sockets)."""
     if before is None or after is None:
         return None
     pids = {int(p["pid"]): name for name, p in processes.items() if name in STACK_PROCESSES}
@@ -223,7 +223,7 @@ async def measure(url: str, encoding: str, duration_s: float, warmup_s: float,
 
 
 def detection_quality(judged: dict[str, list[dict[str, Any]]]) -> dict[str, Any]:
-    """Precision and recall of LIDAR boxes and radar targets (clients.quality)."""
+    """Precision and recall of LIDAR boxes and radar targets (clients.report.quality)."""
     lidar = pair_by_stamp(judged["lidar_truth"], judged["boxes"])
     radar = pair_by_stamp(judged["radar_truth"], judged["radar"])
     quality: dict[str, Any] = {}

@@ -16,7 +16,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from clients.thesis import FIGURES
+from clients.report.thesis import FIGURES
 from schemas.catalogue import TOPICS as CATALOGUE
 from schemas.tracing import header_stamp_ns
 
@@ -31,7 +31,7 @@ STEP_PREFIX = "process."
 SENSOR_TOPICS = tuple(t.name for t in CATALOGUE.values() if t.thesis_sensor)
 
 # The thesis's overhead (tables 4.9/4.10): 1.62 MB/s of network load for 291.27 KB/s of
-# sensor payload. Every other figure, with its statistic and source: clients.thesis.
+# sensor payload. Every other figure, with its statistic and source: clients.report.thesis.
 THESIS_OVERHEAD = 1.62e6 / 291.27e3
 THESIS_WIRE_BPS = 1.62e6
 THESIS_PAYLOAD_BPS = 291.27e3
@@ -290,7 +290,7 @@ def network_summary(topics: Mapping[str, Mapping[str, Any]], loopback_bytes: int
     """The network load the thesis's way (table 4.10 over table 4.9) and the encoding ratio.
 
     * ``stack_over_sensor_payload``: every byte the stack's TCP sockets sent in the window
-      (``sockets``, clients.sockets: each hop once, every op and telemetry batch, not the
+      (``sockets``, clients.report.sockets: each hop once, every op and telemetry batch, not the
       report's own connection) over the payload of the four sensor streams (CDR bytes x
       rate): the thesis's 1.62 MB/s over 291.27 KB/s. ``loopback_over_sensor_payload`` is
       the same with ``lo``'s transmit counter, which also counts every other program here.

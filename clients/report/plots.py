@@ -6,8 +6,8 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from clients.report import stage_order
-from clients.report_text import run_label
+from clients.report.stats import stage_order
+from clients.report.text import run_label
 
 
 def write_plots(runs: list[dict[str, Any]], folder: Path) -> list[Path]:

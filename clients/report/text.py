@@ -4,7 +4,7 @@ Every latency row prints the mean (the statistic of the thesis's appendix A, Ø)
 thesis's figure and its source, then p50/p90/p99/max; bytes are CDR payload (the thesis's
 table 4.9) and websocket wire bytes, whose ratio is an *encoding ratio* of one hop; the
 network overhead the thesis's way (table 4.10 over 4.9) counts every byte the stack's sockets
-sent. Pure formatting of the dicts ``clients.report_cli`` builds.
+sent. Pure formatting of the dicts ``clients.report.cli`` builds.
 """
 
 from __future__ import annotations
@@ -13,8 +13,8 @@ import math
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-from clients.report import RESULT, SENSOR_TOPICS, THESIS_OVERHEAD, TRANSPORT, stage_order
-from clients.thesis import FIGURES, render_comparison_rows
+from clients.report.stats import RESULT, SENSOR_TOPICS, THESIS_OVERHEAD, TRANSPORT, stage_order
+from clients.report.thesis import FIGURES, render_comparison_rows
 
 
 def fmt_bytes(count: float | None) -> str:
