@@ -1,211 +1,329 @@
 """The report as text: one block per run, and a table comparing the runs (docs/report.md).
 
-Every latency row prints the mean (the statistic of the thesis's appendix A, Ø) beside the
-thesis's figure and its source, then p50/p90/p99/max; bytes are CDR payload (the thesis's
-table 4.9) and websocket wire bytes, whose ratio is an *encoding ratio* of one hop; the
-network overhead the thesis's way (table 4.10 over 4.9) counts every byte the stack's sockets
-sent. Pure formatting of the dicts ``clients.report.cli`` builds.
+Every table is a list of columns below (``*_COLUMNS``, :class:`clients.report.table.Column`),
+and the comparison's rows are lists of quantities (``*_QUANTITIES``): a new column or a new
+compared quantity is one entry. Latency rows print the mean (the statistic of the thesis's
+appendix A, Ø) beside the thesis's figure and its source, then p50/p90/p99/max; bytes are CDR
+payload (the thesis's table 4.9) and websocket wire bytes, whose ratio is an *encoding ratio*
+of one hop; the network overhead the thesis's way (table 4.10 over 4.9) counts every byte the
+stack's sockets sent.
 """
 
 from __future__ import annotations
 
-import math
-from collections.abc import Mapping, Sequence
-from typing import Any
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import NamedTuple
 
-from clients.report.stats import RESULT, SENSOR_TOPICS, THESIS_OVERHEAD, TRANSPORT, stage_order
-from clients.report.thesis import FIGURES, render_comparison_rows
+from clients.report.journeys import RESULT, TRANSPORT, stage_order
+from clients.report.results import (
+    THESIS_NETWORK,
+    DetectionQuality,
+    NetworkSummary,
+    ProcessSummary,
+    Run,
+    StageStats,
+    ThesisRow,
+    TopicSummary,
+)
+from clients.report.stats import SENSOR_TOPICS
+from clients.report.table import (
+    Column,
+    fmt_bytes,
+    fmt_float1,
+    fmt_fraction,
+    fmt_ms,
+    fmt_ratio,
+    fmt_ratio3,
+    render_table,
+    text_column,
+)
+from clients.report.thesis import FIGURES
 
 
-def fmt_bytes(count: float | None) -> str:
-    if not count or math.isnan(count):
+class TopicLine(NamedTuple):
+    topic: str
+    summary: TopicSummary
+    sample: str
+
+
+class StageLine(NamedTuple):
+    stage: str
+    stats: StageStats
+    note: str
+
+
+class ComparisonLine(NamedTuple):
+    topic: str
+    quantity: str
+    cells: tuple[str, ...]
+    thesis: str = ""
+    source: str = ""
+
+
+def fmt_unit(value: float | None, unit: str) -> str:
+    """A thesis row's value in its unit: ``12.30 ms``, ``2.86 MB/s``, ``5.56x``."""
+    if value is None or value != value:  # None or NaN
         return "-"
-    for unit, size in (("MB", 1e6), ("kB", 1e3)):
-        if count >= size:
-            return f"{count / size:.2f} {unit}"
-    return f"{count:.0f} B"
+    if unit in ("B", "B/s"):
+        return fmt_bytes(value) + unit[1:] if abs(value) >= 1e3 else f"{value:.0f} {unit}"
+    return f"{value:.2f}x" if unit == "x" else f"{value:.2f} {unit}"
 
 
-def fmt_ms(value: float | None) -> str:
-    return "-" if value is None or math.isnan(value) else f"{value:.2f}"
+# -- the tables of one run -------------------------------------------------------------------
+
+TOPIC_COLUMNS: tuple[Column[TopicLine], ...] = (
+    text_column("topic", "topic"),
+    Column("rate", "summary.rate_hz", fmt_float1, "Hz"),
+    Column("period", "summary.period_ms", fmt_ms, "ms"),
+    Column("payload", "summary.payload_bytes", fmt_bytes),
+    Column("wire in", "summary.wire_in_bytes", fmt_bytes),
+    Column("wire out", "summary.wire_out_bytes", fmt_bytes),
+    Column("encoding ratio", "summary.overhead_in", fmt_ratio3),
+    text_column("sample", "sample"),
+)
+
+STAGE_COLUMNS: tuple[Column[StageLine], ...] = (
+    text_column("stage (ms)", "stage"),
+    Column("n", "stats.n"),
+    Column("mean", "stats.mean", fmt_ms),
+    Column("p50", "stats.p50", fmt_ms),
+    Column("p90", "stats.p90", fmt_ms),
+    Column("p99", "stats.p99", fmt_ms),
+    Column("max", "stats.max", fmt_ms),
+    text_column("beside the thesis; deadlines", "note"),
+)
+
+PROCESS_COLUMNS: tuple[Column[ProcessSummary], ...] = (
+    text_column("process", "process"),
+    Column("cpu % mean", "cpu_percent_mean", fmt_float1),
+    Column("cpu % max", "cpu_percent_max", fmt_float1),
+    Column("rss max", "rss_bytes_max", fmt_bytes),
+    Column("msgs out", "messages_out"),
+    Column("msgs in", "messages_in"),
+    Column("dropped", "dropped"),
+)
 
 
-def fmt_ratio(value: float | None, digits: int = 2) -> str:
-    return "-" if value is None or math.isnan(value) else f"{value:.{digits}f}x"
+def _thesis_source(row: ThesisRow) -> str:
+    note = row.note if row.comparable else f"NOT COMPARABLE: {row.note}"
+    return row.source + (f"; {note}" if note else "")
 
 
-def run_label(run: Mapping[str, Any]) -> str:
-    """``profile/encoding`` (``cbor``, ``thesis/json``, ``attached``)."""
-    profile = run.get("profile", "default")
-    return run["encoding"] if profile in ("default", None) else f"{profile}/{run['encoding']}"
+THESIS_COLUMNS: tuple[Column[ThesisRow], ...] = (
+    text_column("quantity", "quantity"),
+    text_column("topic", lambda row: row.topic or "(four sensor streams)"),
+    text_column("stat", "statistic"),
+    Column("ours", lambda row: fmt_unit(row.ours, row.unit)),
+    Column("thesis", lambda row: row.relation.replace("=", "") + fmt_unit(row.thesis, row.unit)),
+    text_column("source", _thesis_source),
+)
 
 
-def _thesis_note(stage: str, summary: Mapping[str, Any]) -> str:
-    thesis = summary.get("thesis", {})
-    if stage not in thesis:
+def _thesis_note(stage: str, summary: TopicSummary) -> str:
+    thesis = summary.thesis
+    if stage not in thesis.means:
         return ""
-    note = f"thesis Ø {thesis[stage]:g} ms ({thesis['sources'][stage]})"
-    if stage in thesis.get("not_comparable", ()):
-        note += " NOT COMPARABLE"
-    return note
+    note = f"thesis Ø {thesis.means[stage]:g} ms ({thesis.sources[stage]})"
+    return note + (" NOT COMPARABLE" if stage in thesis.not_comparable else "")
 
 
-def _stage_rows(summary: Mapping[str, Any]) -> list[str]:
-    rows = []
-    for stage in stage_order(summary["stages"]):
-        p = summary["stages"][stage]
-        if not p.get("n"):
+def _stage_lines(summary: TopicSummary) -> list[StageLine]:
+    lines = []
+    for stage in stage_order(summary.stages):
+        stats = summary.stages[stage]
+        if not stats.n:
             continue
         notes = [_thesis_note(stage, summary)]
         if stage == TRANSPORT:
-            notes.append(f"misses {summary['deadline_misses']}/{p['n']}")
+            notes.append(f"misses {summary.deadline_misses}/{stats.n}")
         if stage == RESULT:
-            notes.append(f"misses {summary['result_deadline_misses']}/{p['n']}, "
-                         f"unprocessed {summary['unprocessed']}")
-        rows.append(f"    {stage:<16}{p['n']:>6}{fmt_ms(p['mean']):>9}{fmt_ms(p['p50']):>9}"
-                    f"{fmt_ms(p['p90']):>9}{fmt_ms(p['p99']):>9}{fmt_ms(p['max']):>9}   "
-                    + "; ".join(n for n in notes if n))
-    return rows
+            notes.append(f"misses {summary.result_deadline_misses}/{stats.n}, "
+                         f"unprocessed {summary.unprocessed}")
+        lines.append(StageLine(stage, stats, "; ".join(n for n in notes if n)))
+    return lines
 
 
-def _header(run: Mapping[str, Any]) -> list[str]:
-    hosts = run.get("hosts", [])
-    profile = run.get("profile")
-    lines = [f"== {run_label(run)}: {run['duration_s']:.1f} s measured on "
+def _header(run: Run) -> list[str]:
+    hosts = run.hosts
+    lines = [f"== {run.label}: {run.duration_s:.1f} s measured on "
              f"{', '.join(hosts) or 'unknown host'}"
              + (" (HOSTS DIFFER: cross-process hops are not comparable)" if len(hosts) > 1
                 else "")]
-    if profile:
-        lines.append(f"   payload profile {profile}; LIDAR water model "
-                     f"{run.get('water_model', 'unknown')}")
-    machine = run.get("machine")
-    if machine:
-        load = machine["load_average_1_5_15"]
-        lines.append(f"   machine: {machine['cpus']} CPUs, load average {load[0]:.1f} / "
+    if run.profile:
+        lines.append(f"   payload profile {run.profile}; LIDAR water model {run.water_model}")
+    if run.machine is not None:
+        load = run.machine.load_average_1_5_15
+        lines.append(f"   machine: {run.machine.cpus} CPUs, load average {load[0]:.1f} / "
                      f"{load[1]:.1f} / {load[2]:.1f} (1/5/15 min) at the window's end")
     return lines
 
 
-def render_run(run: Mapping[str, Any]) -> str:
+def render_run(run: Run) -> str:
     """The human-readable report of one run (one profile and encoding)."""
     lines = _header(run)
-    for topic, summary in run["topics"].items():
-        sample = run.get("samples", {}).get(topic, "")
-        lines.append(
-            f"{topic}  {summary['rate_hz']:.1f} Hz (period {fmt_ms(summary['period_ms'])} ms)"
-            f"  payload {fmt_bytes(summary['payload_bytes'])}  wire in "
-            f"{fmt_bytes(summary['wire_in_bytes'])} / out {fmt_bytes(summary['wire_out_bytes'])}"
-            f"  encoding ratio {summary['overhead_in']:.3f}x"
-            + (f"  [{sample}]" if sample else ""))
-        if summary["stages"]:
-            lines.append(f"    {'stage (ms)':<16}{'n':>6}{'mean':>9}{'p50':>9}{'p90':>9}"
-                         f"{'p99':>9}{'max':>9}")
-            lines += _stage_rows(summary)
-    lines += _process_rows(run.get("processes", {}))
-    lines += _network_rows(run.get("network", {}))
-    lines += _quality_rows(run.get("detection_quality", {}))
-    if run.get("thesis_comparison"):
+    lines += render_table(TOPIC_COLUMNS, [TopicLine(topic, summary, run.samples.get(topic, ""))
+                                          for topic, summary in run.topics.items()])
+    for topic, summary in run.topics.items():
+        stages = _stage_lines(summary)
+        if stages:
+            lines.append(f"  {topic}")
+            lines += render_table(STAGE_COLUMNS, stages, indent="    ")
+    if run.processes:
+        lines += render_table(PROCESS_COLUMNS, list(run.processes.values()))
+    if run.network is not None:
+        lines += _network_lines(run.network)
+    lines += _quality_lines(run.detection_quality)
+    if run.thesis_comparison:
         lines.append("  beside the thesis (same statistic; docs/report.md):")
-        lines += render_comparison_rows(run["thesis_comparison"])
+        lines += render_table(THESIS_COLUMNS, run.thesis_comparison)
     return "\n".join(lines)
 
 
-def _process_rows(processes: Mapping[str, Mapping[str, Any]]) -> list[str]:
-    if not processes:
-        return []
-    rows = [f"  {'process':<14}{'cpu % mean':>11}{'cpu % max':>10}{'rss max':>11}"
-            f"{'msgs out':>10}{'msgs in':>9}{'dropped':>9}"]
-    for name, p in processes.items():
-        rows.append(f"  {name:<14}{p['cpu_percent_mean']:>11.1f}{p['cpu_percent_max']:>10.1f}"
-                    f"{fmt_bytes(p['rss_bytes_max']):>11}{p['messages_out']:>10}"
-                    f"{p['messages_in']:>9}{p['dropped']:>9}")
-    return rows
-
-
-def _network_rows(network: Mapping[str, Any]) -> list[str]:
-    if not network:
-        return []
+def _network_lines(network: NetworkSummary) -> list[str]:
     by_process = ", ".join(f"{name} {fmt_bytes(bps)}/s" for name, bps in
-                           network.get("stack_bytes_per_s_by_process", {}).items())
-    nan = math.nan
+                           network.stack_bytes_per_s_by_process.items())
+    thesis = network.thesis
     return [
         f"  network, the thesis's way (table 4.10 / 4.9): the stack's sockets sent "
-        f"{fmt_bytes(network.get('stack_bytes_per_s', nan))}/s ({by_process or 'not measured'})"
-        f" for {fmt_bytes(network['sensor_payload_bytes_per_s'])}/s of sensor payload = "
-        f"{fmt_ratio(network.get('stack_over_sensor_payload', nan))} (thesis 1.62 MB/s for "
-        f"291.27 kB/s = {THESIS_OVERHEAD:.2f}x); machine loopback "
-        f"{fmt_bytes(network['loopback_bytes_per_s'])}/s = "
-        f"{fmt_ratio(network.get('loopback_over_sensor_payload', nan))} (every program here); "
-        f"the report's own connection {fmt_bytes(network.get('report_connection_bytes_per_s'))}"
+        f"{fmt_bytes(network.stack_bytes_per_s)}/s ({by_process or 'not measured'})"
+        f" for {fmt_bytes(network.sensor_payload_bytes_per_s)}/s of sensor payload = "
+        f"{fmt_ratio(network.stack_over_sensor_payload)} (thesis "
+        f"{fmt_bytes(thesis.wire_bytes_per_s)}/s for {fmt_bytes(thesis.payload_bytes_per_s)}/s"
+        f" = {thesis.overhead:.2f}x); machine loopback "
+        f"{fmt_bytes(network.loopback_bytes_per_s)}/s = "
+        f"{fmt_ratio(network.loopback_over_sensor_payload)} (every program here); "
+        f"the report's own connection {fmt_bytes(network.report_connection_bytes_per_s)}"
         f"/s, not counted",
         f"  encoding ratio (one hop's websocket bytes / CDR bytes): sensor streams "
-        f"({', '.join(SENSOR_TOPICS)}) {fmt_ratio(network['sensor_wire_over_payload'], 3)}, "
-        f"all topics {fmt_ratio(network['wire_over_payload'], 3)} "
-        f"(payload {fmt_bytes(network['payload_bytes_per_s'])}/s, wire "
-        f"{fmt_bytes(network['wire_in_bytes_per_s'])}/s)"]
+        f"({', '.join(SENSOR_TOPICS)}) {fmt_ratio(network.sensor_wire_over_payload, 3)}, "
+        f"all topics {fmt_ratio(network.wire_over_payload, 3)} "
+        f"(payload {fmt_bytes(network.payload_bytes_per_s)}/s, wire "
+        f"{fmt_bytes(network.wire_in_bytes_per_s)}/s)"]
 
 
-def _quality_rows(quality: Mapping[str, Any]) -> list[str]:
+def _quality_lines(quality: DetectionQuality) -> list[str]:
     rows = []
-    lidar, radar = quality.get("lidar"), quality.get("radar")
-    if lidar:
+    lidar, radar = quality.lidar, quality.radar
+    if lidar is not None:
+        counts = lidar.counts
         rows.append(
-            f"  detection quality, LIDAR boxes ({lidar['scans']} scans): precision "
-            f"{_fraction(lidar['precision'])} ({lidar.get('true_boxes', 0)}/"
-            f"{lidar.get('boxes', 0)} boxes on objects), recall {_fraction(lidar['recall'])} "
-            f"({lidar.get('detected_objects', 0)}/{lidar.get('visible_objects', 0)} objects "
-            f"with >= {lidar['min_returns']} returns within {lidar['range_m']:g} m)")
-    if radar:
+            f"  detection quality, LIDAR boxes ({lidar.scans} scans): precision "
+            f"{fmt_fraction(lidar.precision)} ({counts.true_boxes}/{counts.boxes} boxes on "
+            f"objects), recall {fmt_fraction(lidar.recall)} ({counts.detected_objects}/"
+            f"{counts.visible_objects} objects with >= {lidar.min_returns} returns within "
+            f"{lidar.range_m:g} m)")
+    if radar is not None:
+        counts_r = radar.counts
         rows.append(
-            f"  detection quality, radar targets ({radar['sweeps']} sweeps): precision "
-            f"{_fraction(radar['precision'])} ({radar.get('on_object', 0)} on objects + "
-            f"{radar.get('on_land', 0)} on land of {radar.get('targets', 0)} targets), recall "
-            f"{_fraction(radar['recall'])} ({radar.get('detected_objects', 0)}/"
-            f"{radar.get('visible_objects', 0)} objects); open water: "
-            f"{radar.get('open_water_detections', 0)}/{radar.get('open_water_cells', 0)} cells "
-            f"detected = {_fraction(radar['open_water_false_alarm_rate'], 4)} (configured P_fa "
-            f"{radar['configured_false_alarm_rate']:g})")
+            f"  detection quality, radar targets ({radar.sweeps} sweeps): precision "
+            f"{fmt_fraction(radar.precision)} ({counts_r.on_object} on objects + "
+            f"{counts_r.on_land} on land of {counts_r.targets} targets), recall "
+            f"{fmt_fraction(radar.recall)} ({counts_r.detected_objects}/"
+            f"{counts_r.visible_objects} objects); open water: "
+            f"{counts_r.open_water_detections}/{counts_r.open_water_cells} cells detected = "
+            f"{fmt_fraction(radar.open_water_false_alarm_rate, 4)} (configured P_fa "
+            f"{radar.configured_false_alarm_rate:g})")
     return rows
 
 
-def _fraction(value: float | None, digits: int = 3) -> str:
-    return "-" if value is None or math.isnan(value) else f"{value:.{digits}f}"
+# -- the runs side by side -------------------------------------------------------------------
 
 
-def render_comparison(runs: Sequence[Mapping[str, Any]]) -> str:
+@dataclass(frozen=True)
+class TopicQuantity:
+    """A row per sensor topic in the comparison. stage : with a thesis mean of that stage,
+    its figure goes beside. optional : leave the row out when no run has a value."""
+
+    name: str
+    value: Callable[[TopicSummary], float | None]
+    fmt: Callable[[float | None], str]
+    stage: str = ""
+    optional: bool = False
+
+
+@dataclass(frozen=True)
+class RunQuantity:
+    """A row per comparison of whole runs (network, detection quality)."""
+
+    topic: str
+    name: str
+    value: Callable[[Run], float | None]
+    fmt: Callable[[float | None], str]
+    thesis: str = ""
+    source: str = ""
+
+
+def _stage_stat(stage: str, statistic: str) -> Callable[[TopicSummary], float | None]:
+    def value(summary: TopicSummary) -> float | None:
+        stats = summary.stage(stage)
+        return getattr(stats, statistic) if stats is not None and stats.n else None
+    return value
+
+
+TOPIC_QUANTITIES: tuple[TopicQuantity, ...] = (
+    TopicQuantity("transport mean ms", _stage_stat(TRANSPORT, "mean"), fmt_ms, TRANSPORT, True),
+    TopicQuantity("transport p50 ms", _stage_stat(TRANSPORT, "p50"), fmt_ms, optional=True),
+    TopicQuantity("transport p99 ms", _stage_stat(TRANSPORT, "p99"), fmt_ms, optional=True),
+    TopicQuantity("transport max ms", _stage_stat(TRANSPORT, "max"), fmt_ms, optional=True),
+    TopicQuantity("result mean ms", _stage_stat(RESULT, "mean"), fmt_ms, RESULT, True),
+    TopicQuantity("payload mean", lambda summary: summary.payload_bytes_mean, fmt_bytes),
+    TopicQuantity("encoding ratio", lambda summary: summary.overhead_in, fmt_ratio3),
+)
+
+def _overhead(run: Run) -> float | None:
+    return run.network.stack_over_sensor_payload if run.network is not None else None
+
+
+def _quality(sensor: str, figure: str) -> Callable[[Run], float | None]:
+    def value(run: Run) -> float | None:
+        quality = getattr(run.detection_quality, sensor)
+        return None if quality is None else float(getattr(quality, figure))
+    return value
+
+
+RUN_QUANTITIES: tuple[RunQuantity, ...] = (
+    RunQuantity("four sensor streams", "network overhead", _overhead, fmt_ratio,
+                f"{THESIS_NETWORK.overhead:.2f}x", "tables 4.10 / 4.9"),
+    RunQuantity("lidar quality", "precision", _quality("lidar", "precision"), fmt_fraction),
+    RunQuantity("lidar quality", "recall", _quality("lidar", "recall"), fmt_fraction),
+    RunQuantity("radar quality", "precision", _quality("radar", "precision"), fmt_fraction),
+    RunQuantity("radar quality", "recall", _quality("radar", "recall"), fmt_fraction),
+)
+
+
+def _topic_lines(runs: Sequence[Run], topic: str) -> list[ComparisonLine]:
+    means = {(f.topic, f.stage): f for f in FIGURES if f.statistic == "mean" and f.stage}
+    lines = []
+    for quantity in TOPIC_QUANTITIES:
+        values = [None if (summary := run.topic(topic)) is None else quantity.value(summary)
+                  for run in runs]
+        if quantity.optional and all(v is None for v in values):
+            continue
+        figure = means.get((topic, quantity.stage)) if quantity.stage else None
+        thesis = f"{figure.thesis:g}" if figure else ""
+        source = (figure.source + ("" if figure.comparable else " NOT COMPARABLE")
+                  if figure else "")
+        lines.append(ComparisonLine(topic, quantity.name,
+                                    tuple(quantity.fmt(v) for v in values), thesis, source))
+    return lines
+
+
+def render_comparison(runs: Sequence[Run]) -> str:
     """One table comparing the runs per sensor topic: the thesis's statistic (the mean)
     beside its figure, p50/p99/max, payload, ratios and detection quality."""
-    labels = [run_label(r) for r in runs]
-    width = max(12, *(len(label) + 2 for label in labels))
-    lines = [f"{'topic':<26}{'quantity':<24}" + "".join(f"{lb:>{width}}" for lb in labels)
-             + f"{'thesis':>12}  source"]
+    lines: list[ComparisonLine] = []
+    for topic in SENSOR_TOPICS:
+        if any(topic in run.topics for run in runs):
+            lines += _topic_lines(runs, topic)
+    lines += [ComparisonLine(q.topic, q.name, tuple(q.fmt(q.value(run)) for run in runs),
+                             q.thesis, q.source) for q in RUN_QUANTITIES]
+    columns: list[Column[ComparisonLine]] = [text_column("topic", "topic"),
+                                             text_column("quantity", "quantity")]
+    columns += [Column(run.label, _cell(k)) for k, run in enumerate(runs)]
+    columns += [Column("thesis", "thesis"), text_column("source", "source")]
+    return "\n".join(render_table(columns, lines, indent=""))
 
-    def add(topic: str, quantity: str, cells: list[str], thesis: str = "", source: str = ""):
-        lines.append(f"{topic:<26}{quantity:<24}" + "".join(f"{c:>{width}}" for c in cells)
-                     + f"{thesis:>12}  {source}")
 
-    means = {(f.topic, f.stage): f for f in FIGURES if f.statistic == "mean" and f.stage}
-    for topic in [t for t in SENSOR_TOPICS if any(t in r["topics"] for r in runs)]:
-        for stage, key in ((TRANSPORT, "mean"), (TRANSPORT, "p50"), (TRANSPORT, "p99"),
-                           (TRANSPORT, "max"), (RESULT, "mean")):
-            cells = [r["topics"].get(topic, {}).get("stages", {}).get(stage, {}).get(key)
-                     for r in runs]
-            if all(c is None for c in cells):
-                continue
-            figure = means.get((topic, stage)) if key == "mean" else None
-            thesis = f"{figure.thesis:g}" if figure else ""
-            source = (figure.source + ("" if figure.comparable else " NOT COMPARABLE")
-                      if figure else "")
-            add(topic, f"{stage} {key} ms", [fmt_ms(c) for c in cells], thesis, source)
-        add(topic, "payload mean", [fmt_bytes(r["topics"].get(topic, {}).get(
-            "payload_bytes_mean")) for r in runs])
-        add(topic, "encoding ratio", [fmt_ratio(r["topics"].get(topic, {}).get(
-            "overhead_in", math.nan), 3) for r in runs])
-    add("four sensor streams", "network overhead", [fmt_ratio(r.get("network", {}).get(
-        "stack_over_sensor_payload", math.nan)) for r in runs], f"{THESIS_OVERHEAD:.2f}x",
-        "tables 4.10 / 4.9")
-    for sensor in ("lidar", "radar"):
-        for key in ("precision", "recall"):
-            add(f"{sensor} quality", key, [_fraction(r.get("detection_quality", {}).get(
-                sensor, {}).get(key)) for r in runs])
-    return "\n".join(lines)
+def _cell(index: int) -> Callable[[ComparisonLine], str]:
+    return lambda line: line.cells[index]
