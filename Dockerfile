@@ -50,7 +50,7 @@ FROM ${BASE_IMAGE}
 
 # Unbuffered logs; glibc malloc tuned for 4 MB sensor buffers (fresh mmap'd buffers cost ~3 ms
 # of page faults per scan, see performance-measurements.md): the same environment
-# `riverbridge up` gives its children (clients/launcher.py, MALLOC_ENV).
+# `riverbridge up` gives its children (clients/stack/launcher.py, MALLOC_ENV).
 ENV PYTHONUNBUFFERED=1 \
     PYTHONDONTWRITEBYTECODE=1 \
     MALLOC_MMAP_THRESHOLD_=268435456 \

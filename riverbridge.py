@@ -16,8 +16,8 @@ SUBCOMMANDS: dict[str, tuple[str, str]] = {
     "sim": ("simulator.cli", "run the simulator (scene, vessel, sensors) against a bridge"),
     "nav": ("navigation.cli", "run the navigation service against a bridge"),
     "teleop": ("simulator.teleop_cli", "steer the simulated vessel from the keyboard"),
-    "up": ("clients.up_cli", "run bridge, simulator and navigation as three local processes"),
-    "report": ("clients.report_cli", "measure latency and bytes per topic and stage, next to "
+    "up": ("clients.stack.up_cli", "run bridge, simulator and navigation as three local processes"),
+    "report": ("clients.report.cli", "measure latency and bytes per topic and stage, next to "
                "the thesis's figures"),
     "record": ("clients.recording.record_cli", "record a bridge's topics into an MCAP file"),
     "play": ("clients.recording.play_cli", "publish an MCAP recording into a bridge at its "

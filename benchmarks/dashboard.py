@@ -7,7 +7,7 @@ share of frames over 50 ms, long tasks, messages received per topic, and the JS 
 The trend is a least-squares line through the heap's floor (the minimum per window, i.e. what
 survives garbage collection), in MiB per minute.
 
-Starts ``python -m clients.up_cli --port 0`` itself unless ``--url`` names a running bridge.
+Starts ``python -m clients.stack.up_cli --port 0`` itself unless ``--url`` names a running bridge.
 Usage: python benchmarks/dashboard.py [--minutes N] [--url http://127.0.0.1:9090/]
 """
 
@@ -43,7 +43,7 @@ def started_stack() -> Iterator[str]:
         log_path = Path(folder) / "up.log"
         with log_path.open("w") as log:
             process = subprocess.Popen(
-                [sys.executable, "-m", "clients.up_cli", "--port", "0"], cwd=REPO_ROOT,
+                [sys.executable, "-m", "clients.stack.up_cli", "--port", "0"], cwd=REPO_ROOT,
                 env=stack_env(), stdin=subprocess.DEVNULL, stdout=log, stderr=subprocess.STDOUT,
                 start_new_session=True)
         try:

@@ -78,7 +78,7 @@ async def stop(process: asyncio.subprocess.Process) -> None:
 
 @contextlib.asynccontextmanager
 async def stack() -> AsyncIterator[str]:
-    up = await start(sys.executable, "-m", "clients.up_cli", "--host", "127.0.0.1", "--port",
+    up = await start(sys.executable, "-m", "clients.stack.up_cli", "--host", "127.0.0.1", "--port",
                      "0")
     try:
         url = (await wait_line(up, r"connect to (ws://[\d.]+:\d+)"))[1].decode()

@@ -1,6 +1,6 @@
 """Soak: the whole stack for N minutes with a slow and a vanishing client; memory must stay flat.
 
-Runs `python -m clients.up_cli --port 0` (bridge, simulator, navigation) and beside it:
+Runs `python -m clients.stack.up_cli --port 0` (bridge, simulator, navigation) and beside it:
 
 - an IMU probe: subscribes to /imu/data and records capture -> received per sample;
 - a slow client: subscribes to the LIDAR scan, the camera and the IMU (CBOR) and reads one
@@ -67,7 +67,7 @@ class Stack:
 
     def __init__(self) -> None:
         self.process = subprocess.Popen(
-            [sys.executable, "-m", "clients.up_cli", "--port", "0"], cwd=ROOT,
+            [sys.executable, "-m", "clients.stack.up_cli", "--port", "0"], cwd=ROOT,
             stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, bufsize=1)
         self.pids: dict[str, int] = {"up": self.process.pid}
         self.url = ""

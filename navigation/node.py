@@ -20,8 +20,8 @@ from concurrent.futures import ThreadPoolExecutor
 from typing import Any
 
 from clients import RosbridgeClient, Subscription
-from clients.node_links import node_links
 from clients.protocol import Encoding
+from clients.stack.node_links import node_links
 from clients.tracing import Tracer
 from navigation.config import NavigationConfig
 from navigation.diagnostics import SensorCounters, diagnostic_array_msg

@@ -27,8 +27,8 @@ from concurrent.futures import ThreadPoolExecutor
 from typing import Any
 
 from clients import RosbridgeClient, Subscription
-from clients.node_links import node_links
 from clients.protocol import Encoding
+from clients.stack.node_links import node_links
 from clients.tracing import Tracer
 from schemas.catalogue import TOPICS, Topic, published_by
 from schemas.runtime.process import background_priority

@@ -6,8 +6,8 @@ from __future__ import annotations
 import pytest
 from pydantic import BaseModel
 
-from clients.launcher import NAVIGATION_TOPICS, SIMULATOR_TOPICS
-from clients.report import SENSOR_TOPICS
+from clients.report.stats import SENSOR_TOPICS
+from clients.stack.launcher import NAVIGATION_TOPICS, SIMULATOR_TOPICS
 from navigation.config import LidarConfig, NavigationConfig
 from navigation.node import IMU_INPUT, SENSOR_INPUTS
 from navigation.processors import OUTPUT_TYPES, Processors

@@ -1,4 +1,4 @@
-"""A whole riverbridge stack (``python -m clients.up_cli --port 0``) as a child process, and
+"""A whole riverbridge stack (``python -m clients.stack.up_cli --port 0``) as a child process, and
 the checks that the browser tooling is in place.
 
 Shared by the dashboard tests and ``benchmarks/dashboard.py``: both drive the same running
@@ -70,7 +70,7 @@ def running_stack(log_path: Path) -> Iterator[Stack]:
     env["PYTHONPATH"] = os.pathsep.join(filter(None, [str(REPO_ROOT), env.get("PYTHONPATH")]))
     with log_path.open("w") as log:
         process = subprocess.Popen(
-            [sys.executable, "-m", "clients.up_cli", "--port", "0"], cwd=REPO_ROOT, env=env,
+            [sys.executable, "-m", "clients.stack.up_cli", "--port", "0"], cwd=REPO_ROOT, env=env,
             stdin=subprocess.DEVNULL, stdout=log, stderr=subprocess.STDOUT,
             start_new_session=True)
     try:

@@ -11,8 +11,8 @@ import pytest
 from child_process import REPO_ROOT, repo_env
 
 from bridge import cli
-from clients import up_cli
-from clients.launcher import stack_components
+from clients.stack import up_cli
+from clients.stack.launcher import stack_components
 
 
 def bridge_config(argv: list[str]):

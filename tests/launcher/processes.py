@@ -28,10 +28,10 @@ _CONNECT = re.compile(r"connect to (?P<url>wss?://(?P<host>[\d.]+):(?P<port>\d+)
 
 
 class UpProcess(Running):
-    """``python -m clients.up_cli --host 127.0.0.1 --port 0 ...`` and what it announced."""
+    """``python -m clients.stack.up_cli --host 127.0.0.1 --port 0 ...`` and what it announced."""
 
     def __init__(self, *extra_args: str) -> None:
-        super().__init__([sys.executable, "-m", "clients.up_cli", "--host", "127.0.0.1",
+        super().__init__([sys.executable, "-m", "clients.stack.up_cli", "--host", "127.0.0.1",
                           "--port", "0", *extra_args])
 
     def wait_ready(self, timeout_s: float = STARTUP_TIMEOUT_S) -> str:

@@ -18,7 +18,7 @@ from typing import Literal
 import pytest
 
 from clients import RosbridgeClient
-from clients.launcher import (
+from clients.stack.launcher import (
     MALLOC_ENV,
     NAVIGATION_TOPICS,
     SIMULATOR_TOPICS,

@@ -22,12 +22,18 @@ pytestmark = pytest.mark.slow
 
 
 def ignored(relative: Path, patterns: list[str]) -> bool:
-    """Docker's .dockerignore matching, for the pattern forms our file uses."""
-    text = relative.as_posix()
+    """Docker's .dockerignore matching, for the pattern forms our file uses: a pattern
+    matches a path from the context's root (``*`` stays within one name, a matching folder
+    takes its contents along); ``**/`` in front lets it match at any depth."""
+    parts = relative.parts
     for pattern in patterns:
-        bare = pattern.removeprefix("**/")
-        if fnmatch.fnmatch(text, pattern) or any(
-                fnmatch.fnmatch(part, bare) for part in relative.parts):
+        anywhere = pattern.startswith("**/")
+        wanted = pattern.removeprefix("**/").split("/")
+        starts = range(len(parts)) if anywhere else range(1)
+        if any(len(parts) - start >= len(wanted) and all(
+                fnmatch.fnmatch(part, want)
+                for part, want in zip(parts[start:start + len(wanted)], wanted, strict=True))
+               for start in starts):
             return True
     return False
 
@@ -65,6 +71,9 @@ def test_dockerignore_keeps_sources_and_drops_caches() -> None:
     assert ignored(Path("tests/launcher/test_compose.py"), patterns)
     assert not ignored(Path("schemas/interfaces/riverbridge_msgs/msg/RadarImage.msg"), patterns)
     assert not ignored(Path("bridge/core.py"), patterns)
+    # `report*` is the report's output at the top, not the report's package
+    assert ignored(Path("report/bytes.png"), patterns)
+    assert not ignored(Path("clients/report/cli.py"), patterns)
 
 
 def test_the_image_install_step_yields_a_working_package(tmp_path: Path) -> None:
@@ -98,7 +107,7 @@ def test_the_image_install_step_yields_a_working_package(tmp_path: Path) -> None
                      env=env, cwd=elsewhere)
     try:
         port = bridge.wait_for_line(r"listening on ws://127\.0\.0\.1:(?P<port>\d+)")["port"]
-        run(sys.executable, "-m", "clients.healthcheck", "--bridge", f"ws://127.0.0.1:{port}",
+        run(sys.executable, "-m", "clients.stack.healthcheck", "--bridge", f"ws://127.0.0.1:{port}",
             "--topic", "/rosout", cwd=elsewhere, env=env)
         assert bridge.stop() == 0, bridge.text()
     finally:

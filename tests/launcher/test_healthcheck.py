@@ -1,4 +1,4 @@
-"""`python -m clients.healthcheck` against a real bridge process."""
+"""`python -m clients.stack.healthcheck` against a real bridge process."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ from collections.abc import Iterator
 import pytest
 
 from clients import RosbridgeClient
-from clients.healthcheck import Unhealthy, check
+from clients.stack.healthcheck import Unhealthy, check
 
 from .processes import REPO_ROOT, Running, free_port, repo_env
 
@@ -30,7 +30,7 @@ def bridge_url() -> Iterator[str]:
 
 
 def healthcheck(*args: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([sys.executable, "-m", "clients.healthcheck", *args], cwd=REPO_ROOT,
+    return subprocess.run([sys.executable, "-m", "clients.stack.healthcheck", *args], cwd=REPO_ROOT,
                           env=repo_env(), capture_output=True, text=True, timeout=120)
 
 

@@ -9,8 +9,8 @@ from pathlib import Path
 
 import pytest
 
-from clients.healthcheck import version_url
-from clients.launcher import (
+from clients.stack.healthcheck import version_url
+from clients.stack.launcher import (
     BRIDGE_URL,
     NAVIGATION_TOPICS,
     SIMULATOR_TOPICS,

@@ -6,7 +6,7 @@ import pytest
 from prometheus_client.parser import text_string_to_metric_families
 
 from bridge.metrics import MetricsSnapshot, render_metrics
-from clients.restarts import (
+from clients.stack.restarts import (
     INITIAL_DELAY_S,
     MAX_DELAY_S,
     STABLE_AFTER_S,

@@ -21,7 +21,7 @@ from dataclasses import replace
 import pytest
 
 from clients import RosbridgeClient
-from clients.launcher import (
+from clients.stack.launcher import (
     Component,
     LaunchConfig,
     PrefixedLogHandler,
@@ -42,7 +42,7 @@ def output() -> Iterator[io.StringIO]:
     """Everything the supervisor and its children wrote, prefixed."""
     stream = io.StringIO()
     handler = PrefixedLogHandler(PrefixedOutput(stream))
-    logger = logging.getLogger("clients.launcher")
+    logger = logging.getLogger("clients.stack.launcher")
     logger.addHandler(handler)
     logger.setLevel(logging.INFO)
     yield stream

@@ -7,8 +7,8 @@ import sys
 
 import pytest
 
-from clients import up_cli
-from clients.launcher import LaunchConfig
+from clients.stack import up_cli
+from clients.stack.launcher import LaunchConfig
 
 from .processes import REPO_ROOT, repo_env
 
@@ -43,7 +43,7 @@ def test_bad_option_exits_2_naming_it(argv: list[str], option: str,
 def test_missing_config_file_through_the_real_command_line() -> None:
     """Started as users start it; nothing is launched, the message names option and file."""
     result = subprocess.run(
-        [sys.executable, "-m", "clients.up_cli", "--nav-config", "missing-nav.toml"],
+        [sys.executable, "-m", "clients.stack.up_cli", "--nav-config", "missing-nav.toml"],
         cwd=REPO_ROOT, env=repo_env(), capture_output=True, text=True, timeout=120)
     assert result.returncode == 2
     assert "--nav-config" in result.stderr and "missing-nav.toml" in result.stderr
@@ -70,7 +70,7 @@ def test_defaults_are_rosbridges_port_on_loopback_with_cbor() -> None:
 
 def test_access_options_reach_the_bridge_and_the_clients(tmp_path) -> None:
     from clients.connection import AUTH_SECRET_ENV
-    from clients.launcher import access_environment, stack_components
+    from clients.stack.launcher import access_environment, stack_components
 
     secret, cert, key = (tmp_path / name for name in ("secret", "cert.pem", "key.pem"))
     for path in (secret, cert, key):

@@ -1,4 +1,4 @@
-"""`python -m clients.up_cli` as users run it: three processes, a roslibpy client, shutdown.
+"""`python -m clients.stack.up_cli` as users run it: three processes, a roslibpy client, shutdown.
 """
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ from tls_certificates import make_certificate
 from clients import RosbridgeClient
 from clients.connection import TransportConfig
 from clients.errors import ServiceError
-from clients.launcher import NAVIGATION_TOPICS, SIMULATOR_TOPICS
+from clients.stack.launcher import NAVIGATION_TOPICS, SIMULATOR_TOPICS
 
 from .processes import UpProcess, kill_leftovers, wait_gone
 

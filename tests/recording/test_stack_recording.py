@@ -12,7 +12,7 @@ from launcher.processes import UpProcess
 from mcap.reader import make_reader
 from mcap_ros2.decoder import DecoderFactory
 
-from clients.launcher import NAVIGATION_TOPICS, SIMULATOR_TOPICS
+from clients.stack.launcher import NAVIGATION_TOPICS, SIMULATOR_TOPICS
 
 from .conftest import RIVERBRIDGE
 

@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from clients.quality import (
+from clients.report.quality import (
     LAND,
     NO_RETURN,
     WATER,
@@ -19,6 +19,7 @@ from clients.quality import (
     radar_quality,
     radar_sweep_counts,
 )
+from clients.report.results import LidarCounts, RadarCounts
 
 
 def header(sec: int, frame: str = "lidar") -> dict:
@@ -60,11 +61,11 @@ def test_lidar_counts_true_boxes_and_visible_detected_objects():
         box((50.0, 50.0, 0.0), (51.0, 51.0, 1.0)),  # nothing there: a false box
         box((-1.0, -31.0, 0.0), (1.0, -29.0, 1.0)),  # on object 2: true, though not visible
     ]}
-    assert lidar_scan_counts(truth, boxes) == {
-        "boxes": 4, "true_boxes": 3, "visible_objects": 2, "detected_objects": 1}
+    assert lidar_scan_counts(truth, boxes) == LidarCounts(
+        boxes=4, true_boxes=3, visible_objects=2, detected_objects=1)
     quality = lidar_quality([(truth, boxes), (truth, boxes)])
-    assert quality["scans"] == 2 and quality["boxes"] == 8
-    assert quality["precision"] == pytest.approx(0.75) and quality["recall"] == pytest.approx(0.5)
+    assert quality.scans == 2 and quality.counts.boxes == 8
+    assert quality.precision == pytest.approx(0.75) and quality.recall == pytest.approx(0.5)
 
 
 def test_radar_targets_are_judged_by_their_strongest_cell():
@@ -86,20 +87,20 @@ def test_radar_targets_are_judged_by_their_strongest_cell():
                               {"peak_beam": 2, "peak_cell": 2},  # on land
                               {"peak_beam": 3, "peak_cell": 1}]}  # on open water: false
     counts = radar_sweep_counts(truth, detections)
-    assert counts == {"targets": 3, "on_object": 1, "on_land": 1, "on_open_water": 1,
-                      "visible_objects": 1, "detected_objects": 1,
-                      "open_water_cells": 17, "open_water_detections": 2}
+    assert counts == RadarCounts(targets=3, on_object=1, on_land=1, on_open_water=1,
+                                 visible_objects=1, detected_objects=1,
+                                 open_water_cells=17, open_water_detections=2)
     quality = radar_quality([(truth, detections)])
-    assert quality["precision"] == pytest.approx(2 / 3) and quality["recall"] == 1.0
-    assert quality["open_water_false_alarm_rate"] == pytest.approx(2 / 17)
-    assert quality["configured_false_alarm_rate"] == pytest.approx(0.1)
+    assert quality.precision == pytest.approx(2 / 3) and quality.recall == 1.0
+    assert quality.open_water_false_alarm_rate == pytest.approx(2 / 17)
+    assert quality.configured_false_alarm_rate == pytest.approx(0.1)
 
 
 def test_pairs_need_the_same_stamp_and_no_pairs_give_no_figure():
     truths = [{"header": header(s)} for s in (1, 2, 3)]
     outputs = [{"header": header(s)} for s in (3, 1, 5)]
     assert [t["header"]["stamp"]["sec"] for t, _ in pair_by_stamp(truths, outputs)] == [1, 3]
-    assert math.isnan(lidar_quality([])["precision"]) and radar_quality([])["sweeps"] == 0
+    assert math.isnan(lidar_quality([]).precision) and radar_quality([]).sweeps == 0
 
 
 @pytest.mark.parametrize("profile", ["default", "thesis"])
@@ -137,9 +138,9 @@ def test_navigation_meets_the_targets_on_the_default_scene(profile):
         lidar.close()
         radar.close()
     lidar_q, radar_q = lidar_quality(lidar_pairs), radar_quality(radar_pairs)
-    assert lidar_q["visible_objects"] >= len(lidar_pairs) * 3
-    assert lidar_q["precision"] >= 0.9 and lidar_q["recall"] >= 0.8, lidar_q
-    assert radar_q["visible_objects"] >= len(radar_pairs) * 3
-    assert radar_q["precision"] >= 0.9 and radar_q["recall"] >= 0.8, radar_q
-    assert radar_q["open_water_false_alarm_rate"] <= radar_q["configured_false_alarm_rate"]
-    assert radar_q["on_open_water"] == 0
+    assert lidar_q.counts.visible_objects >= len(lidar_pairs) * 3
+    assert lidar_q.precision >= 0.9 and lidar_q.recall >= 0.8, lidar_q
+    assert radar_q.counts.visible_objects >= len(radar_pairs) * 3
+    assert radar_q.precision >= 0.9 and radar_q.recall >= 0.8, radar_q
+    assert radar_q.open_water_false_alarm_rate <= radar_q.configured_false_alarm_rate
+    assert radar_q.counts.on_open_water == 0

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from clients.report_cli import main, profile_sim_config
+from clients.report.cli import main, profile_sim_config
 
 SENSORS = {"/lidar/points": 2.0, "/radar/image": 2.0, "/camera/image/compressed": 2.0,
            "/imu/data": 50.0}
@@ -63,7 +63,7 @@ def test_unreachable_bridge_fails_with_1(capsys, tmp_path):
 def test_a_report_of_both_profiles_is_complete_and_consistent(tmp_path: Path):
     out = tmp_path / "r.json"
     done = subprocess.run(
-        [sys.executable, "-m", "clients.report_cli", "--duration", "8", "--warmup", "3",
+        [sys.executable, "-m", "clients.report.cli", "--duration", "8", "--warmup", "3",
          "--profile", "default,thesis", "--json", str(out), "--log", str(tmp_path / "stack.log")],
         capture_output=True, text=True, timeout=190, cwd=Path(__file__).resolve().parents[2])
     assert done.returncode == 0, done.stderr[-2000:] + (tmp_path / "stack.log").read_text()[-3000:]

@@ -3,24 +3,23 @@
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
 
-from clients.report import (
-    RESULT,
-    TRANSPORT,
-    SpanRecord,
-    journeys,
+from clients.report.journeys import RESULT, TRANSPORT, SpanRecord, journeys, spans_of_batch
+from clients.report.results import Run, TopicSummary
+from clients.report.sockets import SocketTraffic
+from clients.report.stats import (
     loopback_tx_bytes,
     median_interval_ms,
     network_summary,
     percentiles,
     process_summary,
-    spans_of_batch,
     summarise,
 )
-from clients.report_text import render_comparison, render_run
+from clients.report.text import render_comparison, render_run
 
 MS = 1_000_000
 TOPIC = "/lidar/points"
@@ -81,10 +80,10 @@ def test_two_subscribers_pair_with_their_own_fanout():
 def test_percentiles_are_ordered_and_match_numpy():
     values = list(np.random.default_rng(1).exponential(5.0, 1000))
     p = percentiles(values)
-    assert p["n"] == 1000
-    assert p["p50"] <= p["p90"] <= p["p99"] <= p["max"]
-    assert p["p99"] == pytest.approx(np.percentile(values, 99))
-    assert percentiles([]) == {"n": 0}
+    assert p.n == 1000
+    assert p.p50 <= p.p90 <= p.p99 <= p.max
+    assert p.p99 == pytest.approx(np.percentile(values, 99))
+    assert percentiles([]).n == 0 and math.isnan(percentiles([]).mean)
 
 
 def test_summary_counts_rate_misses_bytes_and_thesis():
@@ -93,18 +92,19 @@ def test_summary_counts_rate_misses_bytes_and_thesis():
     for k in range(10):
         spans += path_spans(10**18 + k * period_ns, transport_extra_ms=600.0 if k == 3 else 0)
     topic = summarise(spans, duration_s=5.0)[TOPIC]
-    assert topic["messages"] == 10
-    assert topic["rate_hz"] == pytest.approx(2.0)
-    assert topic["period_ms"] == pytest.approx(500.0)
-    assert topic["deadline_misses"] == 1
-    assert topic["result_deadline_misses"] == 1
-    assert topic["overhead_in"] == pytest.approx(1.01)
-    assert topic["thesis"][TRANSPORT] == 86.0 and topic["thesis"]["process.boxes"] == 186.0
-    assert topic["thesis"]["statistic"] == "mean"  # appendix A's Ø
-    assert topic["thesis"]["sources"][TRANSPORT] == "table A.1 5b"
-    assert topic["thesis"]["not_comparable"] == ["process.dbscan", "process.boxes"]
-    assert topic["payload_bytes_mean"] == pytest.approx(1000.0)
-    assert topic["unprocessed"] == 0
+    assert topic.messages == 10
+    assert topic.rate_hz == pytest.approx(2.0)
+    assert topic.period_ms == pytest.approx(500.0)
+    assert topic.deadline_misses == 1
+    assert topic.result_deadline_misses == 1
+    assert topic.overhead_in == pytest.approx(1.01)
+    thesis = topic.thesis
+    assert thesis.means[TRANSPORT] == 86.0 and thesis.means["process.boxes"] == 186.0
+    assert thesis.statistic == "mean"  # appendix A's Ø
+    assert thesis.sources[TRANSPORT] == "table A.1 5b"
+    assert thesis.not_comparable == ("process.dbscan", "process.boxes")
+    assert topic.payload_bytes_mean == pytest.approx(1000.0)
+    assert topic.unprocessed == 0
 
 
 def test_messages_never_processed_count_as_unprocessed_except_the_last_ones():
@@ -112,7 +112,7 @@ def test_messages_never_processed_count_as_unprocessed_except_the_last_ones():
     for k in range(10):
         full = path_spans(10**18 + k * 500 * MS)
         spans += [s for s in full if s.stage != "process"] if k in (2, 9) else full
-    assert summarise(spans, 5.0)[TOPIC]["unprocessed"] == 1  # k=9 may still be in progress
+    assert summarise(spans, 5.0)[TOPIC].unprocessed == 1  # k=9 may still be in progress
 
 
 def test_batches_unpack_into_records():
@@ -143,49 +143,56 @@ def test_process_and_network_summaries():
               "dropped": 0} for sec, c, r in ((1, 10.0, 100), (2, 30.0, 300), (3, 50.0, 200))]
     # A process with two connections announces its third sample on both.
     bridge = process_summary([*stats, stats[2]])["bridge"]
-    assert bridge["samples"] == 3
-    assert bridge["cpu_percent_mean"] == pytest.approx(30.0)
-    assert bridge["rss_bytes_max"] == 300
-    topics = {"/a": {"payload_bytes": 1000, "wire_in_bytes": 1100, "rate_hz": 2.0}}
+    assert bridge.samples == 3
+    assert bridge.cpu_percent_mean == pytest.approx(30.0)
+    assert bridge.rss_bytes_max == 300
+    topics = {"/a": a_topic(1000, 1100, 2.0)}
     network = network_summary(topics, loopback_bytes=44_000, duration_s=10.0)
-    assert network["wire_over_payload"] == pytest.approx(1.1)
-    assert network["loopback_over_payload"] == pytest.approx(2.2)
-    assert math.isnan(network["sensor_wire_over_payload"]), "no sensor stream among them"
-    topics["/lidar/points"] = {"payload_bytes": 10_000, "wire_in_bytes": 10_100, "rate_hz": 2.0}
-    topics["/imu/data"] = {"payload_bytes": 100, "wire_in_bytes": 190, "rate_hz": 10.0}
+    assert network.wire_over_payload == pytest.approx(1.1)
+    assert network.loopback_over_payload == pytest.approx(2.2)
+    assert math.isnan(network.sensor_wire_over_payload), "no sensor stream among them"
+    topics["/lidar/points"] = a_topic(10_000, 10_100, 2.0)
+    topics["/imu/data"] = a_topic(100, 190, 10.0)
     network = network_summary(topics, loopback_bytes=None, duration_s=10.0)
-    assert network["sensor_wire_over_payload"] == pytest.approx((20_200 + 1900) / 21_000)
-    assert network["wire_over_payload"] == pytest.approx((22_100 + 2200) / 23_000)
-    assert math.isnan(network["stack_over_sensor_payload"]), "no socket counters given"
+    assert network.sensor_wire_over_payload == pytest.approx((20_200 + 1900) / 21_000)
+    assert network.wire_over_payload == pytest.approx((22_100 + 2200) / 23_000)
+    assert math.isnan(network.stack_over_sensor_payload), "no socket counters given"
+
+
+def a_topic(payload_bytes: int, wire_in_bytes: int, rate_hz: float) -> TopicSummary:
+    """A topic summary with the bytes and rate the network figures read."""
+    spans = path_spans(10**18)
+    summary = summarise(spans, 1.0)[TOPIC]
+    return replace(summary, payload_bytes=payload_bytes, wire_in_bytes=wire_in_bytes,
+                   rate_hz=rate_hz)
 
 
 def test_the_network_overhead_the_thesis_way_counts_every_socket_byte_over_sensor_payload():
     """Table 4.10 over 4.9: all the stack sent (every hop) / the four streams' payload."""
-    topics = {"/lidar/points": {"payload_bytes": 10_000, "wire_in_bytes": 10_100, "rate_hz": 2.0},
-              "/nav/boxes": {"payload_bytes": 500, "wire_in_bytes": 900, "rate_hz": 2.0}}
-    sockets = {"stack_bytes": 600_000, "instrument_bytes": 5_000,
-               "by_process": {"bridge": 250_000, "simulator": 300_000, "navigation": 50_000}}
+    topics = {"/lidar/points": a_topic(10_000, 10_100, 2.0), "/nav/boxes": a_topic(500, 900, 2.0)}
+    sockets = SocketTraffic(stack_bytes=600_000, instrument_bytes=5_000, sockets=6, by_process={
+        "bridge": 250_000, "simulator": 300_000, "navigation": 50_000})
     network = network_summary(topics, loopback_bytes=1_000_000, duration_s=10.0, sockets=sockets)
-    assert network["stack_bytes_per_s"] == pytest.approx(60_000.0)
-    assert network["stack_over_sensor_payload"] == pytest.approx(3.0)  # 60 kB/s / 20 kB/s
-    assert network["loopback_over_sensor_payload"] == pytest.approx(5.0)
-    assert network["stack_bytes_per_s_by_process"]["simulator"] == pytest.approx(30_000.0)
-    assert network["report_connection_bytes_per_s"] == pytest.approx(500.0)
-    assert network["thesis"]["overhead"] == pytest.approx(1.62e6 / 291.27e3)
+    assert network.stack_bytes_per_s == pytest.approx(60_000.0)
+    assert network.stack_over_sensor_payload == pytest.approx(3.0)  # 60 kB/s / 20 kB/s
+    assert network.loopback_over_sensor_payload == pytest.approx(5.0)
+    assert network.stack_bytes_per_s_by_process["simulator"] == pytest.approx(30_000.0)
+    assert network.report_connection_bytes_per_s == pytest.approx(500.0)
+    assert network.thesis.overhead == pytest.approx(1.62e6 / 291.27e3)
 
 
 def test_tables_render_every_stage_and_the_comparison():
     spans = [s for k in range(5) for s in path_spans(10**18 + k * 500 * MS)]
-    run = {"encoding": "cbor", "duration_s": 2.5, "hosts": ["host"],
-           "topics": summarise(spans, 2.5), "samples": {TOPIC: "10 points x 16 B"}}
+    run = Run("cbor", 2.5, hosts=("host",), topics=summarise(spans, 2.5),
+              samples={TOPIC: "10 points x 16 B"})
     text = render_run(run)
     for stage in ("generate", "bridge_to_sub", "process.dbscan", TRANSPORT,
                   "thesis Ø 86 ms (table A.1 5b)", "mean", "encoding ratio"):
         assert stage in text
     assert "thesis Ø 29 ms (table A.1 3f) NOT COMPARABLE" in text
     assert "10 points x 16 B" in text
-    comparison = render_comparison([run, {**run, "encoding": "json"},
-                                    {**run, "profile": "thesis"}])
+    comparison = render_comparison([run, replace(run, encoding="json"),
+                                    replace(run, profile="thesis")])
     header = comparison.splitlines()[0]
     assert "cbor" in header and "json" in header and "thesis/cbor" in header
     assert "transport mean ms" in comparison and "table A.1 5b" in comparison
@@ -193,13 +200,13 @@ def test_tables_render_every_stage_and_the_comparison():
 
 
 def test_plots_are_written_per_run_and_topic(tmp_path):
-    from clients.report import by_topic, stage_values
-    from clients.report_plots import write_plots
+    from clients.report.journeys import by_topic, stage_values
+    from clients.report.plots import write_plots
 
     spans = [s for k in range(5) for s in path_spans(10**18 + k * 500 * MS)]
     values = {t: stage_values(items) for t, items in by_topic(journeys(spans)).items()}
-    run = {"encoding": "cbor", "topics": summarise(spans, 2.5), "samples": {}, "_values": values}
-    written = write_plots([run, {**run, "profile": "thesis"}], tmp_path)
+    run = Run("cbor", 2.5, topics=summarise(spans, 2.5), stage_values=values)
+    written = write_plots([run, replace(run, profile="thesis")], tmp_path)
     names = sorted(p.name for p in written)
     assert names == ["bytes.png", "cbor_lidar_points.png", "thesis-cbor_lidar_points.png"]
     assert all(p.stat().st_size > 1000 for p in written)

@@ -6,8 +6,8 @@ from __future__ import annotations
 import asyncio
 import os
 
-from clients.report_cli import read_sockets
-from clients.sockets import SocketBytes, parse_ss, window_traffic
+from clients.report.measure import read_sockets
+from clients.report.sockets import SocketBytes, SocketTraffic, parse_ss, window_traffic
 
 SS_TEXT = """\
 0      0      127.0.0.1:9090 127.0.0.1:50000 users:(("python3",pid=10,fd=16))
@@ -38,8 +38,8 @@ def test_the_window_counts_what_the_stack_sent_and_sets_the_report_apart():
     traffic = window_traffic(before, after, {10: "bridge", 20: "simulator"}, [99])
     # bridge -> simulator 10,000; simulator -> bridge 1,400 + 123 on a new socket;
     # bridge -> report (pid 99) 1,800 apart; the report's own 80 and sshd not at all
-    assert traffic == {"stack_bytes": 10_000 + 1_400 + 123, "instrument_bytes": 1_800,
-                       "by_process": {"bridge": 10_000, "simulator": 1_523}, "sockets": 4}
+    assert traffic == SocketTraffic(stack_bytes=10_000 + 1_400 + 123, instrument_bytes=1_800,
+                                    by_process={"bridge": 10_000, "simulator": 1_523}, sockets=4)
     assert window_traffic(before, after, {77: "bridge"}, [99]) is None
 
 
@@ -67,4 +67,4 @@ async def test_the_kernel_counts_what_we_send_over_loopback():
     assert before is not None and after is not None, "ss (iproute2) is missing"
     traffic = window_traffic(before, after, {os.getpid(): "me"}, [])
     assert traffic is not None
-    assert 1_000_000 <= traffic["stack_bytes"] < 1_010_000
+    assert 1_000_000 <= traffic.stack_bytes < 1_010_000

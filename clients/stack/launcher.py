@@ -13,9 +13,9 @@ Design (asyncio subprocesses, one event loop, no threads of our own):
 - Readiness is checked, never slept on: the bridge's ``listening on ws://HOST:PORT`` line (it
   also tells the port when ``--port 0``), then ``GET /version``; the simulator and navigation
   are ready when every topic they publish has a publisher in ``/rosapi/publishers``
-  (:mod:`clients.healthcheck`).
+  (:mod:`clients.stack.healthcheck`).
 - Once the stack is ready a component that dies is restarted (``restart``: on-failure by
-  default, :mod:`clients.restarts`) with backoff while the others keep running; the bridge
+  default, :mod:`clients.stack.restarts`) with backoff while the others keep running; the bridge
   comes back on the same port and the clients reconnect to it. Each restart is logged and
   counted on the latched ``/riverbridge/restarts`` topic (dashboard, ``GET /metrics``).
 - Whatever ends the run (a signal, a child exiting with ``restart never``, a start-up
@@ -44,8 +44,8 @@ from pydantic import BaseModel, ConfigDict, Field, SecretStr
 from clients.client import RosbridgeClient
 from clients.connection import AUTH_SECRET_ENV, TransportConfig
 from clients.errors import RosbridgeError
-from clients.healthcheck import Unhealthy, fetch_version, missing_publishers
-from clients.restarts import RestartBackoff, RestartLedger, RestartMode, RestartPolicy
+from clients.stack.healthcheck import Unhealthy, fetch_version, missing_publishers
+from clients.stack.restarts import RestartBackoff, RestartLedger, RestartMode, RestartPolicy
 from schemas.catalogue import streams_of
 from schemas.rosauth import read_secret
 
@@ -91,7 +91,7 @@ class LaunchConfig(BaseModel):
     startup_timeout_s: float = Field(default=120.0, gt=0)
     # Per escalation step (SIGINT, then SIGTERM, then SIGKILL); the parts stop in ~1 s.
     stop_timeout_s: float = Field(default=10.0, gt=0)
-    # What happens to a component that dies once the stack runs (clients.restarts).
+    # What happens to a component that dies once the stack runs (clients.stack.restarts).
     restart: RestartMode = "on-failure"
     # The bridge's access options (docs/bridge.md, "Security and hostile input"); with a
     # secret or a certificate the simulator and navigation authenticate and trust it too.

@@ -1,12 +1,12 @@
 """Is the bridge up, and does each given topic have a publisher? A check through the bridge.
 
-``python -m clients.healthcheck --bridge ws://bridge:9090 [--topic /lidar/points ...]`` exits 0
-when the bridge answers ``GET /version`` and every ``--topic`` has at least one publisher in
-``/rosapi/publishers``, 1 otherwise (with the reason on stderr). Docker compose runs it as the
-services' health checks; ``riverbridge up`` uses the same functions to decide that a component
-is ready. A topic *listed* in ``/rosapi/topics`` is not enough: a subscriber with a type makes
-the bridge list the topic too (the navigation service subscribes to the simulator's topics
-before the simulator exists), so readiness means a publisher.
+``python -m clients.stack.healthcheck --bridge ws://bridge:9090 [--topic /lidar/points ...]``
+exits 0 when the bridge answers ``GET /version`` and every ``--topic`` has at least one
+publisher in ``/rosapi/publishers``, 1 otherwise (with the reason on stderr). Docker compose
+runs it as the services' health checks; ``riverbridge up`` uses the same functions to decide
+that a component is ready. A topic *listed* in ``/rosapi/topics`` is not enough: a subscriber
+with a type makes the bridge list the topic too (the navigation service subscribes to the
+simulator's topics before the simulator exists), so readiness means a publisher.
 """
 
 from __future__ import annotations
@@ -97,7 +97,7 @@ async def check(bridge_url: str, topics: Sequence[str],
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="python -m clients.healthcheck",
+    parser = argparse.ArgumentParser(prog="python -m clients.stack.healthcheck",
                                      description=__doc__.split("\n\n")[0])
     parser.add_argument("--bridge", default="ws://127.0.0.1:9090", help="rosbridge URL")
     parser.add_argument("--topic", action="append", default=[], metavar="TOPIC",

@@ -25,6 +25,8 @@ from typing import Any
 
 import numpy as np
 
+from clients.report.results import LidarCounts, LidarQuality, RadarCounts, RadarQuality
+
 LIDAR_MIN_RETURNS = 10  # thesis table 4.4 MinPts: fewer returns cannot make a cluster
 EVALUATION_RANGE_M = 100.0  # thesis 4.1: obstacles of interest within about 100 m
 MATCH_MARGIN_M = 1.0  # thesis table 4.4 Eps: a cluster reaches this far beyond its points
@@ -50,11 +52,13 @@ def inside_objects(centres: np.ndarray, objects: list[Msg], margin_m: float) -> 
     c, s = np.cos(yaw)[None], np.sin(yaw)[None]
     along = c * d[..., 0] + s * d[..., 1]
     across = -s * d[..., 0] + c * d[..., 1]
-    return ((np.abs(along) <= half[None, :, 0]) & (np.abs(across) <= half[None, :, 1])
-            & (np.abs(d[..., 2]) <= half[None, :, 2]))
+    inside: np.ndarray = ((np.abs(along) <= half[None, :, 0])
+                          & (np.abs(across) <= half[None, :, 1])
+                          & (np.abs(d[..., 2]) <= half[None, :, 2]))
+    return inside
 
 
-def lidar_scan_counts(truth: Msg, boxes: Msg) -> dict[str, int]:
+def lidar_scan_counts(truth: Msg, boxes: Msg) -> LidarCounts:
     """One scan: boxes, true boxes, visible objects, detected visible objects."""
     objects = list(truth["objects"])
     items = list(boxes["boxes"])
@@ -64,11 +68,11 @@ def lidar_scan_counts(truth: Msg, boxes: Msg) -> dict[str, int]:
     visible = np.array([int(o["returns"]) >= LIDAR_MIN_RETURNS
                         and float(o["range_m"]) <= EVALUATION_RANGE_M for o in objects], bool)
     detected = inside.any(axis=0) & visible
-    return {"boxes": len(items), "true_boxes": int(inside.any(axis=1).sum()),
-            "visible_objects": int(visible.sum()), "detected_objects": int(detected.sum())}
+    return LidarCounts(boxes=len(items), true_boxes=int(inside.any(axis=1).sum()),
+                       visible_objects=int(visible.sum()), detected_objects=int(detected.sum()))
 
 
-def radar_sweep_counts(truth: Msg, detections: Msg) -> dict[str, int]:
+def radar_sweep_counts(truth: Msg, detections: Msg) -> RadarCounts:
     """One sweep: targets by what their strongest cell holds, objects, open-water cells."""
     source = np.asarray(truth["cell_source"], np.int64).reshape(
         int(truth["num_beams"]), int(truth["num_cells"]))
@@ -81,39 +85,30 @@ def radar_sweep_counts(truth: Msg, detections: Msg) -> dict[str, int]:
     visible = {int(o["id"]) for o in truth["objects"] if int(o["dominant_cells"]) > 0}
     detected = set(np.unique(source[hit & (source >= 0)]).tolist()) & visible
     open_water = (source == WATER) | (source == NO_RETURN)
-    return {"targets": len(peak), "on_object": int((peak >= 0).sum()),
-            "on_land": int((peak == LAND).sum()),
-            "on_open_water": int(((peak == WATER) | (peak == NO_RETURN)).sum()),
-            "visible_objects": len(visible), "detected_objects": len(detected),
-            "open_water_cells": int(open_water.sum()),
-            "open_water_detections": int((hit & open_water).sum())}
-
-
-def _pooled(counts: Iterable[Mapping[str, int]]) -> tuple[int, dict[str, int]]:
-    total: dict[str, int] = {}
-    n = 0
-    for item in counts:
-        n += 1
-        for key, value in item.items():
-            total[key] = total.get(key, 0) + value
-    return n, total
+    return RadarCounts(targets=len(peak), on_object=int((peak >= 0).sum()),
+                       on_land=int((peak == LAND).sum()),
+                       on_open_water=int(((peak == WATER) | (peak == NO_RETURN)).sum()),
+                       visible_objects=len(visible), detected_objects=len(detected),
+                       open_water_cells=int(open_water.sum()),
+                       open_water_detections=int((hit & open_water).sum()))
 
 
 def _ratio(num: int, den: int) -> float:
     return num / den if den else math.nan
 
 
-def lidar_quality(pairs: Iterable[tuple[Msg, Msg]]) -> dict[str, Any]:
+def lidar_quality(pairs: Iterable[tuple[Msg, Msg]]) -> LidarQuality:
     """Precision and recall of the LIDAR boxes over (truth, boxes) pairs of the same scan."""
-    scans, total = _pooled(lidar_scan_counts(truth, boxes) for truth, boxes in pairs)
-    return {"scans": scans, **total,
-            "precision": _ratio(total.get("true_boxes", 0), total.get("boxes", 0)),
-            "recall": _ratio(total.get("detected_objects", 0), total.get("visible_objects", 0)),
-            "min_returns": LIDAR_MIN_RETURNS, "range_m": EVALUATION_RANGE_M,
-            "margin_m": MATCH_MARGIN_M}
+    counts = [lidar_scan_counts(truth, boxes) for truth, boxes in pairs]
+    total = sum(counts, LidarCounts())
+    return LidarQuality(scans=len(counts), counts=total,
+                        precision=_ratio(total.true_boxes, total.boxes),
+                        recall=_ratio(total.detected_objects, total.visible_objects),
+                        min_returns=LIDAR_MIN_RETURNS, range_m=EVALUATION_RANGE_M,
+                        margin_m=MATCH_MARGIN_M)
 
 
-def radar_quality(pairs: Iterable[tuple[Msg, Msg]]) -> dict[str, Any]:
+def radar_quality(pairs: Iterable[tuple[Msg, Msg]]) -> RadarQuality:
     """Precision, recall and the open-water false-alarm rate of the radar targets over
     (truth, detections) pairs of the same sweep."""
     configured = math.nan
@@ -121,14 +116,13 @@ def radar_quality(pairs: Iterable[tuple[Msg, Msg]]) -> dict[str, Any]:
     for truth, detections in pairs:
         configured = float(detections["false_alarm_rate"])
         counts.append(radar_sweep_counts(truth, detections))
-    sweeps, total = _pooled(counts)
-    targets = total.get("targets", 0)
-    return {"sweeps": sweeps, **total,
-            "precision": _ratio(total.get("on_object", 0) + total.get("on_land", 0), targets),
-            "recall": _ratio(total.get("detected_objects", 0), total.get("visible_objects", 0)),
-            "open_water_false_alarm_rate": _ratio(total.get("open_water_detections", 0),
-                                                  total.get("open_water_cells", 0)),
-            "configured_false_alarm_rate": configured}
+    total = sum(counts, RadarCounts())
+    return RadarQuality(
+        sweeps=len(counts), counts=total,
+        precision=_ratio(total.on_object + total.on_land, total.targets),
+        recall=_ratio(total.detected_objects, total.visible_objects),
+        open_water_false_alarm_rate=_ratio(total.open_water_detections, total.open_water_cells),
+        configured_false_alarm_rate=configured)
 
 
 def pair_by_stamp(truths: Iterable[Msg], outputs: Iterable[Msg]) -> list[tuple[Msg, Msg]]:

@@ -14,14 +14,33 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
+from clients.report.results import (
+    NetworkSummary,
+    StageContext,
+    StageStats,
+    ThesisRow,
+    TopicSummary,
+)
 from schemas.catalogue import TOPICS
 
 LIDAR, RADAR, CAMERA, IMU = (TOPICS[key].name for key in ("lidar", "radar", "camera", "imu"))
 PUBLISH_SIDE = ("generate", "publish_wait", "encode", "send")  # the simulator's share
 STATISTICS = ("mean", "p50", "max", "max-p50", "ratio")
 
-Run = Mapping[str, Any]
-Extract = Callable[[Run], float | None]
+
+@dataclass(frozen=True)
+class Measured:
+    """What a figure of ours is taken from: a run's topics and its network summary."""
+
+    topics: Mapping[str, TopicSummary]
+    network: NetworkSummary | None = None
+
+    def stage(self, topic: str, stage: str) -> StageStats | None:
+        summary = self.topics.get(topic)
+        return summary.stage(stage) if summary is not None else None
+
+
+Extract = Callable[[Measured], float | None]
 
 
 @dataclass(frozen=True)
@@ -53,41 +72,37 @@ def _of_stage(quantity: str, topic: str, stage: str, statistic: str, thesis: flo
                         stage_stat(topic, stage, statistic), stage=stage, **details)
 
 
-def _stage(run: Run, topic: str, stage: str) -> Mapping[str, Any]:
-    return run.get("topics", {}).get(topic, {}).get("stages", {}).get(stage, {})
-
-
 def stage_stat(topic: str, stage: str, statistic: str) -> Extract:
     """``statistic`` (mean, p50, max, max-p50) of one stage of one topic."""
-    def extract(run: Run) -> float | None:
-        values = _stage(run, topic, stage)
-        if not values.get("n"):
+    def extract(run: Measured) -> float | None:
+        values = run.stage(topic, stage)
+        if values is None or not values.n:
             return None
         if statistic == "max-p50":
-            return float(values["max"]) - float(values["p50"])
-        return float(values[statistic])
+            return values.max - values.p50
+        return float(getattr(values, statistic))
     return extract
 
 
 def stage_mean_sum(topic: str, stages: Sequence[str]) -> Extract:
     """Sum of the stages' means: the mean of their sum (the mean is linear), as table A.1's
     "Sum" column adds the means of a class's methods."""
-    def extract(run: Run) -> float | None:
-        means = [_stage(run, topic, s).get("mean") for s in stages]
-        return None if any(m is None for m in means) else float(sum(means))
+    def extract(run: Measured) -> float | None:
+        means = [run.stage(topic, s) for s in stages]
+        return None if any(m is None for m in means) else sum(m.mean for m in means if m)
     return extract
 
 
 def payload_mean(topic: str) -> Extract:
-    def extract(run: Run) -> float | None:
-        value = run.get("topics", {}).get(topic, {}).get("payload_bytes_mean")
-        return float(value) if value else None
+    def extract(run: Measured) -> float | None:
+        summary = run.topics.get(topic)
+        return summary.payload_bytes_mean if summary and summary.payload_bytes_mean else None
     return extract
 
 
 def network(key: str) -> Extract:
-    def extract(run: Run) -> float | None:
-        value = run.get("network", {}).get(key)
+    def extract(run: Measured) -> float | None:
+        value = getattr(run.network, key) if run.network is not None else None
         return None if value is None or math.isnan(value) else float(value)
     return extract
 
@@ -159,44 +174,22 @@ FIGURES: tuple[ThesisFigure, ...] = (
 )
 
 
-def thesis_comparison(run: Run) -> list[dict[str, Any]]:
+def thesis_comparison(run: Measured) -> tuple[ThesisRow, ...]:
     """The rows of one run: {quantity, topic, statistic, ours, thesis, source, ...}.
 
     ``ours`` is None when the run lacks the quantity (e.g. a topic nobody published);
-    latency rows carry the p50/p99/max of the same stage as ``context``.
+    the transport means carry the n/p50/p99/max of the same stage as ``context``.
     """
     rows = []
     for figure in FIGURES:
-        row: dict[str, Any] = {
-            "quantity": figure.quantity, "topic": figure.topic,
-            "statistic": figure.statistic, "ours": figure.ours(run), "thesis": figure.thesis,
-            "relation": figure.relation, "unit": figure.unit, "source": figure.source,
-            "comparable": figure.comparable, "note": figure.note}
+        context = None
         if figure.quantity == "transport" and figure.statistic == "mean":
-            stage = _stage(run, figure.topic, "transport")
-            row["context"] = {k: stage.get(k) for k in ("n", "p50", "p99", "max")}
-        rows.append(row)
-    return rows
-
-
-def _fmt(value: float | None, unit: str) -> str:
-    if value is None or (isinstance(value, float) and math.isnan(value)):
-        return "-"
-    if unit in ("B", "B/s"):
-        for name, size in (("MB", 1e6), ("kB", 1e3)):
-            if abs(value) >= size:
-                return f"{value / size:.2f} {name}{unit[1:]}"
-        return f"{value:.0f} {unit}"
-    return f"{value:.2f} {unit}" if unit != "x" else f"{value:.2f}x"
-
-
-def render_comparison_rows(rows: Sequence[Mapping[str, Any]]) -> list[str]:
-    """The rows as text lines: quantity, statistic, ours, thesis, source, note."""
-    lines = [f"  {'quantity':<26}{'topic':<26}{'stat':<8}{'ours':>12}{'thesis':>14}  source"]
-    for row in rows:
-        thesis = row["relation"].replace("=", "") + _fmt(row["thesis"], row["unit"])
-        note = row["note"] if row["comparable"] else f"NOT COMPARABLE: {row['note']}"
-        lines.append(f"  {row['quantity']:<26}{row['topic'] or '(four sensor streams)':<26}"
-                     f"{row['statistic']:<8}{_fmt(row['ours'], row['unit']):>12}"
-                     f"{thesis:>14}  {row['source']}" + (f"; {note}" if note else ""))
-    return lines
+            stage = run.stage(figure.topic, "transport")
+            context = (StageContext(stage.n, stage.p50, stage.p99, stage.max)
+                       if stage is not None else StageContext(None, None, None, None))
+        rows.append(ThesisRow(
+            quantity=figure.quantity, topic=figure.topic, statistic=figure.statistic,
+            ours=figure.ours(run), thesis=figure.thesis, relation=figure.relation,
+            unit=figure.unit, source=figure.source, comparable=figure.comparable,
+            note=figure.note, context=context))
+    return tuple(rows)

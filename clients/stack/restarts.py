@@ -28,7 +28,7 @@ from schemas.supervision import (
     restarts_msg,
 )
 
-log = logging.getLogger("clients.launcher")
+log = logging.getLogger("clients.stack.launcher")
 
 RestartMode = Literal["on-failure", "always", "never"]
 RESTART_MODES: tuple[RestartMode, ...] = ("on-failure", "always", "never")

@@ -60,8 +60,20 @@ def _socket(fields: list[str], info: str) -> SocketBytes:
                        counters.get("bytes_received", 0))
 
 
+@dataclass(frozen=True)
+class SocketTraffic:
+    """What the stack's sockets sent in a window: in all, to the measuring processes (apart),
+    per stack process; and how many of the stack's sockets were seen."""
+
+    stack_bytes: int
+    instrument_bytes: int
+    by_process: Mapping[str, int]
+    sockets: int
+
+
 def window_traffic(before: Iterable[SocketBytes], after: Iterable[SocketBytes],
-                   stack_pids: Mapping[int, str], instrument_pids: Iterable[int]) -> dict | None:
+                   stack_pids: Mapping[int, str],
+                   instrument_pids: Iterable[int]) -> SocketTraffic | None:
     """What the stack's sockets sent between two snapshots.
 
     stack_pids : pid -> process name of the stack (bridge, simulator, navigation).
@@ -87,5 +99,4 @@ def window_traffic(before: Iterable[SocketBytes], after: Iterable[SocketBytes],
         stack += sent
         name = next(stack_pids[p] for p in sock.pids if p in stack_pids)
         by_process[name] = by_process.get(name, 0) + sent
-    return {"stack_bytes": stack, "instrument_bytes": to_instrument,
-            "by_process": dict(sorted(by_process.items())), "sockets": len(mine)}
+    return SocketTraffic(stack, to_instrument, dict(sorted(by_process.items())), len(mine))

@@ -1,5 +1,5 @@
-"""``riverbridge up`` / ``python -m clients.up_cli``: bridge, simulator and navigation as three
-local processes, with merged, prefixed logs, until Ctrl-C/SIGTERM; a component that dies is
+"""``riverbridge up`` / ``python -m clients.stack.up_cli``: bridge, simulator and navigation as
+three local processes, with merged, prefixed logs, until Ctrl-C/SIGTERM; a component that dies is
 restarted (``--restart``, default on-failure) while the others keep running.
 
 Exit codes: 0 after a clean stop on SIGINT/SIGTERM; 1 when a component died and was not
@@ -16,7 +16,9 @@ import signal
 import sys
 from pathlib import Path
 
-from clients.launcher import (
+from clients.recording.components import recorder_component
+from clients.recording.record_cli import output_file
+from clients.stack.launcher import (
     Component,
     LaunchConfig,
     PrefixedLogHandler,
@@ -24,11 +26,9 @@ from clients.launcher import (
     Supervisor,
     stack_components,
 )
-from clients.recording.components import recorder_component
-from clients.recording.record_cli import output_file
-from clients.restarts import RESTART_MODES
+from clients.stack.restarts import RESTART_MODES
 
-log = logging.getLogger("clients.launcher")
+log = logging.getLogger("clients.stack.launcher")
 
 # Ctrl-C, `kill`/docker stop, and a closed terminal all mean "stop the three cleanly".
 STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
