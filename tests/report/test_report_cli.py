@@ -79,6 +79,8 @@ def test_a_report_of_both_profiles_is_complete_and_consistent(tmp_path: Path):
     assert all(r["source"] and r["statistic"] for r in rows)
     for each in (run, thesis):
         quality = each["detection_quality"]
+        assert quality["lidar"] and quality["radar"], (
+            f"{each['profile']}: no output paired with its ground truth in the window", quality)
         assert quality["lidar"]["precision"] >= 0.9 and quality["lidar"]["recall"] >= 0.8
         assert quality["radar"]["precision"] >= 0.9 and quality["radar"]["recall"] >= 0.8
         radar = quality["radar"]
