@@ -182,7 +182,7 @@ def test_compose_up_builds_runs_and_serves_the_stack(engine: None, tmp_path: Pat
         timings["report"] = time.monotonic() - mark
         assert report.returncode == 0, report.stdout + report.stderr
         for topic in ("/lidar/points", "/imu/data", "/radar/image"):
-            assert f"\n{topic} " in report.stdout, report.stdout
+            assert f" {topic} " in report.stdout, report.stdout  # a row of the one table
         check_dashboard(port)
         check_metrics(port)
         check_image()
