@@ -17,6 +17,9 @@ publisher). Only the queue counts: one big message in the socket's buffer (a sca
 is still reading) is no reason to hold up the publisher's next frames.
 A link that makes no progress for `STALL_S`, or stays backed up longer than `SLOW_S`, is a slow
 reader: nobody waits for it any more until it has caught up, and it drops instead.
+
+A message that cannot be encoded is lost alone: one line names client, topic and error, rate
+limited per client like bad input (`bridge.problems`), with a summary of the rest.
 """
 
 from __future__ import annotations
@@ -33,8 +36,10 @@ from websockets.protocol import State
 
 from bridge.effects import Send
 from bridge.outgoing import CBOR, CBOR_RAW, Delivery, WireFrame, render
+from bridge.problems import NS_PER_S, ProblemLog
 from bridge.reply_budget import ReplyBudget
 from bridge.sendqueue import SendQueue, Waiting
+from schemas.safety import echo, safe_text
 
 logger = logging.getLogger("bridge.server")
 
@@ -65,8 +70,10 @@ class ClientLink:
 
     def __init__(self, client_id: int, ws: ServerConnection, *, limit_bytes: int,
                  pool: Executor, offload_bytes: int, reply_budget_bytes: int,
-                 delivered: Delivered, over_budget: Callable[[str], None]) -> None:
+                 delivered: Delivered, over_budget: Callable[[str], None],
+                 node: str | None = None) -> None:
         self.client_id = client_id
+        self.node = node or f"client {client_id}"  # names the client in log lines
         self.ws = ws
         self.queue = SendQueue(limit_bytes)
         # Answers are never dropped: those queued unread are bounded by closing the client.
@@ -97,6 +104,8 @@ class ClientLink:
         self._progress = asyncio.Event()
         self._backed_up_since: float | None = None
         self._stalled = False
+        self._problems = ProblemLog()  # messages that could not be encoded
+        self._summary_timer: asyncio.TimerHandle | None = None
 
     # -- sending -----------------------------------------------------------------------------
 
@@ -157,38 +166,61 @@ class ClientLink:
             self._await_drain()
         self._note_progress()
 
-    def _render(self, send: Send, fallback_id: str | None = None) -> list[WireFrame] | None:
-        """The frames of `send`; `fallback_id` names the fragments of a message without an id
-        (taken on the loop, so that renders on the worker number them uniquely too)."""
-        if fallback_id is None:
-            fallback_id = self._next_fragment_id()
+    def _render(self, send: Send) -> list[WireFrame] | None:
+        """The frames of `send`, or None (logged) if it cannot be encoded."""
         try:
-            return render(send.item, send.fragment_size, fallback_id)
-        except Exception:  # one unencodable message must not cost the client anything else
-            logger.exception("client %d: cannot encode a message for %s", self.client_id,
-                             send.drop_key or "a reply")
+            return render(send.item, send.fragment_size, self._next_fragment_id())
+        except Exception as exc:  # one unencodable message must not cost the client anything else
+            self._encode_failed(send, exc)
             return None
 
     def _start_render(self, waiting: Waiting) -> None:
         key = waiting.send.drop_key
         try:
-            future = self._loop.run_in_executor(self._pool, self._render, waiting.send,
+            # (the fragment id is taken here, on the loop, so that ids stay unique)
+            future = self._loop.run_in_executor(self._pool, render, waiting.send.item,
+                                                waiting.send.fragment_size,
                                                 self._next_fragment_id())
         except RuntimeError:  # the pool has shut down: the server is stopping
             return
         self._busy.add(key)
 
-        def rendered(done: asyncio.Future[list[WireFrame] | None]) -> None:
+        def rendered(done: asyncio.Future[list[WireFrame]]) -> None:
             self._busy.discard(key)
-            frames = None if done.cancelled() or done.exception() else done.result()
-            if frames is None or self.closed:
+            if done.cancelled() or self.closed:
                 return
+            exc = done.exception()
+            if exc is not None:
+                self._encode_failed(waiting.send, exc)
+                return
+            frames = done.result()
             waiting.frames = frames
             waiting.nbytes = sum(len(f.data) for f in frames)
             self.queue.push_front(waiting)
             self._service()
 
         future.add_done_callback(rendered)
+
+    def _encode_failed(self, send: Send, exc: BaseException) -> None:
+        """One line per unencodable message, at most `LINES_PER_WINDOW` per client every
+        `WINDOW_S`; the rest are counted and summed up when the window ends."""
+        now_ns = time.time_ns()
+        summary = self._problems.expired_summary(now_ns, self.node, "unencodable messages")
+        if summary is not None:
+            logger.warning("%s", summary)
+        full, deadline = self._problems.note(now_ns)
+        if full:
+            logger.error("[%s] cannot encode a message for %s: %s", self.node,
+                         safe_text(send.drop_key or "a reply", 120), echo(exc))
+        if deadline is not None and not self.closed:
+            self._summary_timer = self._loop.call_later((deadline - now_ns) / NS_PER_S,
+                                                        self._log_summary)
+
+    def _log_summary(self) -> None:
+        self._summary_timer = None
+        summary = self._problems.summary(self.node, time.time_ns(), "unencodable messages")
+        if summary is not None:
+            logger.warning("%s", summary)
 
     def _next_fragment_id(self) -> str:
         self._fragment_seq += 1
@@ -266,6 +298,9 @@ class ClientLink:
         self.queue.clear()
         if self._drain_task is not None:
             self._drain_task.cancel()
+        if self._summary_timer is not None:
+            self._summary_timer.cancel()
+        self._log_summary()
         self._progress.set()
 
     # -- room and pacing ---------------------------------------------------------------------

@@ -41,13 +41,13 @@ class ProblemLog:
             return True, None
         return False, self.window_end_ns if self.count == LINES_PER_WINDOW + 1 else None
 
-    def expired_summary(self, now_ns: int, node: str) -> str | None:
+    def expired_summary(self, now_ns: int, node: str, what: str = "bad frames") -> str | None:
         """The summary of a window that has ended without its deadline having fired yet."""
         if self.count and now_ns >= self.window_end_ns:
-            return self.summary(node, now_ns)
+            return self.summary(node, now_ns, what)
         return None
 
-    def summary(self, node: str, now_ns: int) -> str | None:
+    def summary(self, node: str, now_ns: int, what: str = "bad frames") -> str | None:
         """The line for a window that ended (or a client that left) with problems not logged;
         the next problem starts a new window."""
         total, unlogged = self.count, self.count - self.logged
@@ -56,5 +56,5 @@ class ProblemLog:
         self.window_end_ns = 0
         if unlogged <= 0:
             return None
-        return (f"[{node}] {total:,} bad frames in the last {span_s:.3g} s, {unlogged:,} "
+        return (f"[{node}] {total:,} {what} in the last {span_s:.3g} s, {unlogged:,} "
                 "not logged")

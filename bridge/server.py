@@ -132,7 +132,8 @@ class BridgeServer:
             offload_bytes=self.config.offload_threshold_bytes,
             reply_budget_bytes=self.config.reply_budget_bytes,
             delivered=self.telemetry.tracer.delivered,
-            over_budget=lambda reason: self._close_over_budget(client_id, reason))
+            over_budget=lambda reason: self._close_over_budget(client_id, reason),
+            node=self.core.state.sessions[client_id].node)
         paced: set[ClientLink] = set()  # links this client's messages went to that are full
 
         def apply(effects: list[Effect]) -> None:

@@ -110,13 +110,21 @@ class Running:
             raise AssertionError(f"`{' '.join(self.argv)}` ignored {sig.name} for {timeout_s} s;"
                                  f" output:\n{self.text()}") from None
         self._reader.join(timeout=10.0)
+        self._close_output()
         return code
+
+    def _close_output(self) -> None:
+        """Close our end of the output pipe once the reader has seen its end."""
+        if not self._reader.is_alive() and self.process.stdout is not None:
+            self.process.stdout.close()
 
     def kill_session(self) -> None:
         """Last-resort cleanup: SIGKILL everything in the process's session."""
         if self.process.poll() is None:
             os.killpg(self.process.pid, signal.SIGKILL)
             self.process.wait(timeout=STOP_TIMEOUT_S)
+        self._reader.join(timeout=10.0)
+        self._close_output()
 
 
 @contextlib.contextmanager

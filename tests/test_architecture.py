@@ -77,3 +77,17 @@ def test_no_private_names_cross_modules() -> None:
                 if module.split(".")[0] in PACKAGES
                 for name in names if name.startswith("_")]
     assert not offences, "\n".join(offences)
+
+
+def test_every_module_is_named_in_its_packages_readme() -> None:
+    """Each package's README maps its rooms: a module it does not name is a room nobody can
+    find. Modules in subpackages are named by their path inside the package (`ops/topics.py`);
+    `__init__.py` only where it holds more than re-exports is up to the README."""
+    missing = []
+    for package in ("schemas", "bridge", "simulator", "navigation"):
+        readme = (ROOT / package / "README.md").read_text(encoding="utf-8")
+        for path in _sources(package):
+            name = path.relative_to(ROOT / package).as_posix()
+            if path.name != "__init__.py" and f"`{name}`" not in readme:
+                missing.append(f"{package}/README.md does not name {name}")
+    assert not missing, "\n".join(missing)

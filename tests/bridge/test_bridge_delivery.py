@@ -6,12 +6,14 @@ from __future__ import annotations
 import asyncio
 import json
 import socket
+import time
 from collections.abc import AsyncIterator
 
 import pytest
 import websockets
 
 from bridge.config import BridgeConfig
+from bridge.problems import LINES_PER_WINDOW
 from bridge.server import RunningBridge, run_bridge
 from schemas import codec_cbor
 
@@ -202,3 +204,43 @@ async def test_back_to_back_messages_are_fragmented_under_distinct_ids(bridge):
         got = [await next_reassembled(sub, pieces) for _ in texts]
     assert [m["msg"]["data"] for m in got] == texts
     assert len(pieces) == 3
+
+
+FLOOD = 1000
+
+
+@pytest.mark.parametrize("offload_bytes", [1 << 30, 1], ids=["inline", "worker"])
+async def test_a_flood_of_unencodable_messages_logs_a_few_lines_and_costs_nothing_else(
+        registry, caplog, offload_bytes):
+    """A source hands the bridge messages whose CDR is broken (`bytes(-1)` fails): each is
+    lost alone, the log gets at most `LINES_PER_WINDOW` one-line errors and a summary, and the
+    same client's other topic and another client receive every message."""
+    config = BridgeConfig(port=0, offload_threshold_bytes=offload_bytes)
+    async with (run_bridge(config, registry) as bridge,
+                websockets.connect(bridge.url, max_size=None) as plain):
+        await subscribe(plain, "/chatter", "std_msgs/msg/String")
+        async with websockets.connect(bridge.url, max_size=None) as raw:
+            await subscribe(raw, "/odd", "std_msgs/msg/String", "cbor-raw")
+            await subscribe(raw, "/chatter", "std_msgs/msg/String", "cbor-raw")
+            readers = [asyncio.create_task(read_publishes(ws, FLOOD)) for ws in (raw, plain)]
+            for seq in range(FLOOD):
+                now_ns = time.time_ns()
+                bridge.server.apply(bridge.core.publish_external(
+                    "/source", "/odd", "std_msgs/msg/String", {"data": "odd"}, now_ns, cdr=-1))
+                bridge.server.apply(bridge.core.publish_external(
+                    "/source", "/chatter", "std_msgs/msg/String", {"data": f"{seq}"}, now_ns))
+                if seq % 100 == 0:
+                    await asyncio.sleep(0)
+            got_raw, got_plain = await asyncio.gather(*readers)
+            await settle(raw)  # the connection itself is untouched
+        await settle(plain)
+    assert [m["topic"] for m in got_raw] == ["/chatter"] * FLOOD
+    assert [int(m["msg"]["data"]) for m in got_plain] == list(range(FLOOD))
+    lines = [r for r in caplog.records if "cannot encode a message for /odd" in r.getMessage()]
+    assert 1 <= len(lines) <= LINES_PER_WINDOW
+    assert all(r.exc_info is None and "\n" not in r.getMessage() for r in lines)
+    assert "ValueError" in lines[0].getMessage()
+    summaries = [r.getMessage() for r in caplog.records if "unencodable" in r.getMessage()]
+    assert len(summaries) == 1 and f"{FLOOD:,} unencodable messages" in summaries[0]
+    assert f"{FLOOD - len(lines):,} not logged" in summaries[0]
+    assert len(caplog.text) < 20_000

@@ -134,6 +134,8 @@ def running_bridge(extra_args: Sequence[str] = (), port: int = 0) -> Iterator[Br
     finally:
         _stop(process)
         reader.join(timeout=5.0)
+        if not reader.is_alive():  # (a reader still blocked in it would fail on a closed pipe)
+            process.stderr.close()
 
 
 def free_port() -> int:
