@@ -12,6 +12,7 @@ import pytest
 from clients.events import GoalRequest, ServiceRequest
 from clients.protocol import ClientProtocol
 from clients.wire import Frame
+from schemas.ops import OpError
 from schemas.registry import TypeRegistry
 
 
@@ -125,3 +126,15 @@ def test_resume_frames_repeat_the_registrations(proto: ClientProtocol) -> None:
         '{"op":"subscribe","id":"subscribe:/imu:2","topic":"/imu","compression":"none",'
         '"throttle_rate":0,"queue_length":0,"type":"sensor_msgs/msg/Imu"}',
     ]
+
+
+def test_an_op_the_bridge_would_refuse_is_refused_before_sending(proto: ClientProtocol) -> None:
+    """Ops are built by the bridge's own models: a bad field names itself and records nothing."""
+    with pytest.raises(OpError, match="advertise: field 'queue_size' must be an integer"):
+        proto.advertise("/chat", "std_msgs/msg/String", queue_size=1.5)  # type: ignore[arg-type]
+    assert not proto.advertisements
+    with pytest.raises(OpError, match="action_feedback: field 'values' must be an object"):
+        proto.action_feedback(GOAL, [1, 2])
+    with pytest.raises(OpError, match="subscribe: field 'id' must be a string of at most 300"):
+        proto.subscribe("/" + "x" * 600)
+    assert not proto.subscriptions
