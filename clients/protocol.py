@@ -229,8 +229,9 @@ class ClientProtocol:
 
     def advertise_service(self, service: str, type: str) -> Frame:
         """Provide ``service``; calls arrive as :class:`ServiceRequest` events."""
+        frame = op_frame(ops.AdvertiseService, type=type, service=service)
         self._services[service] = type
-        return op_frame(ops.AdvertiseService, type=type, service=service)
+        return frame
 
     def unadvertise_service(self, service: str) -> Frame | None:
         """Stop providing ``service``; ``None`` when it was not advertised."""
