@@ -22,7 +22,7 @@ import logging
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from types import MappingProxyType
-from typing import Any, Literal
+from typing import Any, Literal, TypedDict
 
 from clients.errors import ProtocolError
 from clients.events import (
@@ -38,7 +38,8 @@ from clients.events import (
     TopicMessage,
 )
 from clients.fragments import FragmentAssembler
-from clients.wire import Frame, decode_frame, json_frame
+from clients.wire import Frame, decode_frame, op_frame
+from schemas import ops
 from schemas.errors import SchemaError
 from schemas.frames import publish_cbor, publish_json
 from schemas.message import normalize
@@ -131,15 +132,16 @@ class ClientProtocol:
         previous = self._adverts.get(topic)
         advert_id = previous.advert_id if previous else self.next_id("advertise", topic)
         record = AdvertiseRecord(advert_id, topic, type, latch, queue_size)
+        frame = _advertise_frame(record)
         self._adverts[topic] = record
-        return json_frame(_advertise_op(record))
+        return frame
 
     def unadvertise(self, topic: str) -> Frame | None:
         """Forget an advertisement; ``None`` when the topic was not advertised."""
         record = self._adverts.pop(topic, None)
         if record is None:
             return None
-        return json_frame({"op": "unadvertise", "id": record.advert_id, "topic": topic})
+        return op_frame(ops.Unadvertise, id=record.advert_id, topic=topic)
 
     def encode_publish(self, topic: str, msg: dict[str, Any]) -> Frame:
         """Encode one ``publish`` in the connection encoding (pure, safe on any thread).
@@ -147,6 +149,13 @@ class ClientProtocol:
         ``msg`` in canonical form (bytes, ndarrays) or plain JSON-able values. Cost grows with
         the payload (~1 ms CBOR / ~30 ms JSON for a 4 MB scan), so callers move big ones off
         the event loop.
+
+        The one op not built through its :class:`schemas.ops.Publish` model: validating it
+        costs ~2 µs (``model_construct`` ~9 µs), a third of encoding a whole Imu frame (~6 µs),
+        and would check nothing a typed call does not (``topic: str``, ``msg: Message``; the
+        payload is never walked by the model anyway). It uses the bridge's own typed
+        ``schemas.frames.publish_*`` instead, so both sides write publish frames one way
+        (benchmarks/client_ops.py measures it).
         """
         if self.encoding == "cbor":
             return Frame(publish_cbor(topic, msg), text=False)
@@ -166,9 +175,10 @@ class ClientProtocol:
         sub_id = self.next_id("subscribe", topic)
         record = SubscriptionRecord(sub_id, topic, type, int(throttle_rate_ms),
                                     int(queue_length), compression or self.default_compression())
+        frame = _subscribe_frame(record)
         self._subs[sub_id] = record
         self._reindex()
-        return sub_id, json_frame(_subscribe_op(record))
+        return sub_id, frame
 
     def unsubscribe(self, sub_id: str) -> Frame | None:
         """Drop one subscription id; ``None`` when it was not active."""
@@ -176,7 +186,7 @@ class ClientProtocol:
         if record is None:
             return None
         self._reindex()
-        return json_frame({"op": "unsubscribe", "id": sub_id, "topic": record.topic})
+        return op_frame(ops.Unsubscribe, id=sub_id, topic=record.topic)
 
     def _reindex(self) -> None:
         """Rebuild topic -> ids and the topic -> spec snapshot read by :meth:`decode`.
@@ -203,14 +213,15 @@ class ClientProtocol:
                      timeout_s: float | None = None) -> tuple[str, Frame]:
         """Start a call; return its id and the ``call_service`` frame."""
         call_id = self.next_id("call_service", service)
-        op: dict[str, Any] = {"op": "call_service", "id": call_id, "service": service,
-                              "args": {} if args is None else args}
+        optional: _CallOptions = {}
         if type is not None:
-            op["type"] = type
+            optional["type"] = type
         if timeout_s is not None:
-            op["timeout"] = float(timeout_s)
+            optional["timeout"] = float(timeout_s)
+        frame = op_frame(ops.CallService, id=call_id, service=service,
+                         args={} if args is None else args, **optional)
         self._calls[call_id] = service
-        return call_id, json_frame(op)
+        return call_id, frame
 
     def forget_call(self, call_id: str) -> None:
         """Stop waiting for a call (timed out or cancelled); a late reply is then ignored."""
@@ -218,37 +229,38 @@ class ClientProtocol:
 
     def advertise_service(self, service: str, type: str) -> Frame:
         """Provide ``service``; calls arrive as :class:`ServiceRequest` events."""
+        frame = op_frame(ops.AdvertiseService, type=type, service=service)
         self._services[service] = type
-        return json_frame({"op": "advertise_service", "type": type, "service": service})
+        return frame
 
     def unadvertise_service(self, service: str) -> Frame | None:
         """Stop providing ``service``; ``None`` when it was not advertised."""
         if self._services.pop(service, None) is None:
             return None
-        return json_frame({"op": "unadvertise_service", "service": service})
+        return op_frame(ops.UnadvertiseService, service=service)
 
     @staticmethod
     def service_response(request: ServiceRequest, values: Any, *, result: bool) -> Frame:
         """Answer a :class:`ServiceRequest` (``values``: a dict, or the error text on failure)."""
-        return json_frame({"op": "service_response", "service": request.service,
-                           "values": values, "result": result, "id": request.request_id})
+        return op_frame(ops.ServiceResponse, service=request.service, values=values,
+                        result=result, id=request.request_id)
 
     # ------------------------------------------------------------------------- actions
     def send_action_goal(self, action: str, action_type: str, args: Any = None, *,
                          feedback: bool = True) -> tuple[str, Frame]:
         """Send a goal; feedback and the result arrive as events keyed by the returned id."""
         goal_id = self.next_id("send_action_goal", action)
+        frame = op_frame(ops.SendActionGoal, id=goal_id, action=action, action_type=action_type,
+                         args={} if args is None else args, feedback=feedback)
         self._goals[goal_id] = action
-        return goal_id, json_frame({"op": "send_action_goal", "id": goal_id, "action": action,
-                                    "action_type": action_type,
-                                    "args": {} if args is None else args, "feedback": feedback})
+        return goal_id, frame
 
     def cancel_action_goal(self, goal_id: str) -> Frame | None:
         """Ask the server to cancel a goal; the final :class:`ActionOutcome` still follows."""
         action = self._goals.get(goal_id)
         if action is None:
             return None
-        return json_frame({"op": "cancel_action_goal", "id": goal_id, "action": action})
+        return op_frame(ops.CancelActionGoal, id=goal_id, action=action)
 
     def forget_goal(self, goal_id: str) -> None:
         """Stop tracking a goal (finished, or its caller gave up)."""
@@ -256,26 +268,26 @@ class ClientProtocol:
 
     def advertise_action(self, action: str, type: str) -> Frame:
         """Serve ``action``; goals arrive as :class:`GoalRequest`, cancels as GoalCancel."""
+        frame = op_frame(ops.AdvertiseAction, type=type, action=action)
         self._actions[action] = type
-        return json_frame({"op": "advertise_action", "type": type, "action": action})
+        return frame
 
     def unadvertise_action(self, action: str) -> Frame | None:
         """Stop serving ``action``; ``None`` when it was not advertised."""
         if self._actions.pop(action, None) is None:
             return None
-        return json_frame({"op": "unadvertise_action", "action": action})
+        return op_frame(ops.UnadvertiseAction, action=action)
 
     @staticmethod
     def action_feedback(goal: GoalRequest, values: Any) -> Frame:
         """Progress of a goal we serve."""
-        return json_frame({"op": "action_feedback", "id": goal.goal_id, "action": goal.action,
-                           "values": values})
+        return op_frame(ops.ActionFeedback, id=goal.goal_id, action=goal.action, values=values)
 
     @staticmethod
     def action_result(goal: GoalRequest, values: Any, *, status: int, result: bool) -> Frame:
         """Final answer for a goal we serve (status: action_msgs/GoalStatus)."""
-        return json_frame({"op": "action_result", "id": goal.goal_id, "action": goal.action,
-                           "values": values, "status": status, "result": result})
+        return op_frame(ops.ActionResult, id=goal.goal_id, action=goal.action, values=values,
+                        status=status, result=result)
 
     # ---------------------------------------------------------------------- connection
     def resume_frames(self) -> list[Frame]:
@@ -284,12 +296,12 @@ class ClientProtocol:
         Advertisements first (so a latched publisher exists before anyone subscribes), then
         services and actions, then subscriptions; all with their original ids.
         """
-        frames = [json_frame(_advertise_op(r)) for r in self._adverts.values()]
-        frames += [json_frame({"op": "advertise_service", "type": t, "service": s})
+        frames = [_advertise_frame(r) for r in self._adverts.values()]
+        frames += [op_frame(ops.AdvertiseService, type=t, service=s)
                    for s, t in self._services.items()]
-        frames += [json_frame({"op": "advertise_action", "type": t, "action": a})
+        frames += [op_frame(ops.AdvertiseAction, type=t, action=a)
                    for a, t in self._actions.items()]
-        frames += [json_frame(_subscribe_op(r)) for r in self._subs.values()]
+        frames += [_subscribe_frame(r) for r in self._subs.values()]
         return frames
 
     def connection_lost(self) -> tuple[list[str], list[str]]:
@@ -415,16 +427,26 @@ ClientProtocol._HANDLERS = MappingProxyType({
 })
 
 
-def _advertise_op(record: AdvertiseRecord) -> dict[str, Any]:
-    return {"op": "advertise", "id": record.advert_id, "type": record.type,
-            "topic": record.topic, "latch": record.latch, "queue_size": record.queue_size}
+def _advertise_frame(record: AdvertiseRecord) -> Frame:
+    return op_frame(ops.Advertise, id=record.advert_id, type=record.type, topic=record.topic,
+                    latch=record.latch, queue_size=record.queue_size)
 
 
-def _subscribe_op(record: SubscriptionRecord) -> dict[str, Any]:
-    op: dict[str, Any] = {"op": "subscribe", "id": record.sub_id, "topic": record.topic,
-                          "compression": record.compression,
-                          "throttle_rate": record.throttle_rate_ms,
-                          "queue_length": record.queue_length}
-    if record.type is not None:
-        op["type"] = record.type
-    return op
+class _CallOptions(TypedDict, total=False):
+    """`call_service` fields sent only when given (after the others, as always)."""
+
+    type: str
+    timeout: float
+
+
+class _SubscribeType(TypedDict, total=False):
+    """A `subscribe` names its type only when the caller gave one (roslibpy sends null)."""
+
+    type: str
+
+
+def _subscribe_frame(record: SubscriptionRecord) -> Frame:
+    typed: _SubscribeType = {} if record.type is None else {"type": record.type}
+    return op_frame(ops.Subscribe, id=record.sub_id, topic=record.topic,
+                    compression=record.compression, throttle_rate=record.throttle_rate_ms,
+                    queue_length=record.queue_length, **typed)

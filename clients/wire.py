@@ -12,8 +12,9 @@ style). A ``png`` op is unwrapped here into the op it carries.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, ParamSpec, cast
 
 import numpy as np
 
@@ -21,6 +22,9 @@ from clients.errors import ProtocolError
 from schemas import codec_cbor, codec_json
 from schemas.codec_png import decode_png_data
 from schemas.errors import SchemaError
+from schemas.ops import OpBase, op_name, validate_op
+
+P = ParamSpec("P")
 
 _JSON_LEAD_BYTES = frozenset(b" \t\r\n{")
 """First bytes of a JSON object text; a CBOR map (major type 5) starts with 0xa0-0xbf."""
@@ -42,6 +46,26 @@ class Frame:
 def json_frame(op: dict[str, Any]) -> Frame:
     """Encode a control op (subscribe, call_service, ...) as a JSON text frame."""
     return Frame(codec_json.dumps(op), text=True)
+
+
+def op_frame(model: Callable[P, OpBase], /, *args: P.args, **fields: P.kwargs) -> Frame:
+    """The JSON text frame of one op, built and checked by its :mod:`schemas.ops` model.
+
+    ``op_frame(Unsubscribe, id=sub_id, topic=topic)``: mypy checks the fields against the
+    model's signature, pydantic checks the values (the same model the bridge parses the op
+    with), so a field the bridge would refuse raises :class:`schemas.ops.OpError` naming it
+    here, before anything is sent. The fields go out in the order given, with the values the
+    model holds: rosbridge reads keys by name, but the order keeps the client's frames byte for
+    byte what they have always been (tests/clients/test_client_wire_bytes.py pins them).
+    Costs ~2 µs over a plain dict: fine for control ops; ``publish`` does not come here.
+    """
+    if args:
+        raise TypeError(f"{op_name(cast(type[OpBase], model))}: op fields are keywords")
+    op = validate_op(cast(type[OpBase], model), fields)
+    wire: dict[str, Any] = {"op": op_name(type(op))}
+    for name in fields:
+        wire[name] = getattr(op, name)
+    return json_frame(wire)
 
 
 def decode_frame(data: bytes | bytearray | memoryview | str) -> dict[str, Any]:

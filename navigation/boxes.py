@@ -13,6 +13,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import numpy.typing as npt
 
 
 @dataclass(frozen=True)
@@ -24,8 +25,8 @@ class Boxes:
     num_points : (m,) uint32, cluster points inside the box.
     """
 
-    min_xyz: np.ndarray
-    max_xyz: np.ndarray
+    min_xyz: npt.NDArray[np.float32]
+    max_xyz: npt.NDArray[np.float32]
     cluster_id: np.ndarray
     num_points: np.ndarray
 

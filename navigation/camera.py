@@ -12,6 +12,7 @@ from typing import Any
 
 import cv2
 import numpy as np
+import numpy.typing as npt
 
 from navigation.config import CameraConfig
 from navigation.messages import header_msg
@@ -88,8 +89,8 @@ def clip_to_image(polar: np.ndarray, width: int, height: int) -> np.ndarray:
     first = np.argmin(np.where(inside, along, np.inf), axis=1)
     last = np.argmax(np.where(inside, along, -np.inf), axis=1)
     rows = np.arange(rho.shape[0])
-    keep = inside.sum(axis=1) >= 1
-    out = np.column_stack(
+    keep: npt.NDArray[np.bool_] = inside.sum(axis=1) >= 1
+    out: npt.NDArray[np.float64] = np.column_stack(
         [
             rho,
             theta,

@@ -22,6 +22,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
+import numpy.typing as npt
 from numpy.lib.stride_tricks import sliding_window_view
 
 from navigation.cfar_pfa import ca_factor, detector_factor, os_pfa, solve_factor
@@ -141,7 +142,7 @@ class CfarDetector:
         return both, lead, lag
 
 
-def _mean(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+def _mean(a: npt.NDArray[np.float64], b: npt.NDArray[np.float64]) -> npt.NDArray[np.float64]:
     return 0.5 * (a + b)
 
 
@@ -174,7 +175,7 @@ def ring_side_sums(power: np.ndarray, n_side: int,
     def window(first: np.ndarray) -> np.ndarray:
         start = first % beams
         stop = start + n_side
-        sums = csum[np.minimum(stop, beams)] - csum[start]
+        sums: npt.NDArray[np.float64] = csum[np.minimum(stop, beams)] - csum[start]
         wraps = stop > beams
         sums[wraps] += csum[stop[wraps] - beams]
         return sums

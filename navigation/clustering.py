@@ -7,6 +7,7 @@ return labels : (n,) int32 with -1 for noise (only DBSCAN produces noise).
 from __future__ import annotations
 
 import numpy as np
+import numpy.typing as npt
 from scipy import sparse
 from sklearn.cluster import DBSCAN, Birch, KMeans
 from sklearn.neighbors import NearestNeighbors
@@ -21,7 +22,7 @@ def adaptive_eps(xyz: np.ndarray, config: LidarConfig) -> np.ndarray:
     objects; n is ``eps_precision_factor``, theta the angular resolution in degrees.
     xyz : (n, 3) float, sensor frame -> (n,) float64 metres.
     """
-    distance_m = np.linalg.norm(np.asarray(xyz, np.float64), axis=1)
+    distance_m: npt.NDArray[np.float64] = np.linalg.norm(np.asarray(xyz, np.float64), axis=1)
     arc_m = config.angular_resolution_deg * np.pi * distance_m / 180.0
     return np.maximum(config.eps_precision_factor * arc_m, config.eps_min_m)
 
@@ -39,7 +40,7 @@ def dbscan_labels(
         return np.empty(0, dtype=np.int32)
     if not config.adaptive_eps:
         model = DBSCAN(eps=config.eps_m, min_samples=config.min_samples, n_jobs=config.n_jobs)
-        return model.fit_predict(xyz, sample_weight=weights).astype(np.int32)
+        return np.asarray(model.fit_predict(xyz, sample_weight=weights), dtype=np.int32)
     eps_m = adaptive_eps(xyz, config)
     search = NearestNeighbors(radius=float(eps_m.max()), n_jobs=config.n_jobs).fit(xyz)
     graph = search.radius_neighbors_graph(xyz, mode="distance", sort_results=False).tocoo()
@@ -51,7 +52,7 @@ def dbscan_labels(
     n = xyz.shape[0]
     normalised = sparse.csr_matrix((scaled, (graph.row[keep], graph.col[keep])), shape=(n, n))
     model = DBSCAN(eps=1.0 + 1e-6, min_samples=config.min_samples, metric="precomputed")
-    return model.fit_predict(normalised, sample_weight=weights).astype(np.int32)
+    return np.asarray(model.fit_predict(normalised, sample_weight=weights), dtype=np.int32)
 
 
 def kmeans_labels(
@@ -62,7 +63,7 @@ def kmeans_labels(
     if k == 0:
         return np.empty(0, dtype=np.int32)
     model = KMeans(n_clusters=k, n_init=1, random_state=0)
-    return model.fit_predict(xyz, sample_weight=weights).astype(np.int32)
+    return np.asarray(model.fit_predict(xyz, sample_weight=weights), dtype=np.int32)
 
 
 def birch_labels(
@@ -77,7 +78,7 @@ def birch_labels(
     leaf = model.fit_predict(xyz)
     centres = model.subcluster_centers_
     merge = DBSCAN(eps=config.eps_m, min_samples=1).fit_predict(centres)
-    return merge[leaf].astype(np.int32)
+    return np.asarray(merge[leaf], dtype=np.int32)
 
 
 CLUSTERERS = {"dbscan": dbscan_labels, "kmeans": kmeans_labels, "birch": birch_labels}

@@ -11,6 +11,7 @@ from dataclasses import dataclass
 
 import cv2
 import numpy as np
+import numpy.typing as npt
 
 from navigation.config import GroundConfig
 
@@ -22,8 +23,8 @@ def range_mask(points: np.ndarray, range_min_m: float, range_max_m: float) -> np
     """
     x = points[:, 0]
     y = points[:, 1]
-    range_sq = x * x + y * y
-    finite = np.isfinite(range_sq) & np.isfinite(points[:, 2])
+    range_sq: npt.NDArray[np.float64] = x * x + y * y
+    finite: npt.NDArray[np.bool_] = np.isfinite(range_sq) & np.isfinite(points[:, 2])
     return finite & (range_sq >= range_min_m**2) & (range_sq <= range_max_m**2)
 
 
@@ -57,7 +58,7 @@ def local_ground_height(points: np.ndarray, extent_m: float, config: GroundConfi
     n_cells = int(np.ceil(2.0 * half_m / cell)) + 1
     ix = np.clip(((points[:, 0] + half_m) / cell).astype(np.intp), 0, n_cells - 1)
     iy = np.clip(((points[:, 1] + half_m) / cell).astype(np.intp), 0, n_cells - 1)
-    flat = iy * n_cells + ix
+    flat: npt.NDArray[np.intp] = iy * n_cells + ix
     grid = _second_lowest_per_cell(flat, points[:, 2], n_cells * n_cells)
     grid = grid.reshape(n_cells, n_cells)
     width = max(1, round(config.opening_width_m / cell) | 1)

@@ -14,6 +14,7 @@ import cv2
 import numpy as np
 
 from schemas.catalogue import TOPICS
+from schemas.values import Message
 from simulator.config import CameraConfig, SimConfig
 from simulator.frames import Pose2D, mount_rotation, rotate_rows, sensor_pose_in_map
 from simulator.messages import compressed_image
@@ -84,7 +85,8 @@ class Camera:
                                 partial(self._shade_chunk, lit, image))
         return image.reshape(cfg.height_px, cfg.width_px, 3)
 
-    def _shade_chunk(self, lit_bgr, image, chunk: slice, range_m, prim) -> None:
+    def _shade_chunk(self, lit_bgr: np.ndarray, image: np.ndarray, chunk: slice,
+                     range_m: np.ndarray, prim: np.ndarray) -> None:
         """Shade one chunk of pixels into `image[chunk]` (runs on a ray-casting thread):
         the sky everywhere, then material colour hazed by range where a triangle was hit."""
         bgr = self._bgr[chunk]
@@ -119,7 +121,7 @@ class Camera:
             raise RuntimeError("OpenCV failed to encode the camera frame as JPEG")
         return jpeg.tobytes()
 
-    def message(self, jpeg: bytes, stamp_ns: int) -> dict:
+    def message(self, jpeg: bytes, stamp_ns: int) -> Message:
         """sensor_msgs/msg/CompressedImage of one frame, stamped with its capture time."""
         return compressed_image(jpeg, stamp_ns, self.cfg.frame_id)
 

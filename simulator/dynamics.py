@@ -18,6 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from schemas.values import Message
 from simulator.config import VesselConfig
 from simulator.frames import Pose2D, rotation_z, wrap_angle_rad
 from simulator.scene import Scene
@@ -58,7 +59,7 @@ class Command:
     yaw_moment_nm: float = 0.0
 
     @classmethod
-    def from_wrench(cls, wrench: dict) -> Command:
+    def from_wrench(cls, wrench: Message) -> Command:
         """From a canonical geometry_msgs/msg/Wrench: force.x = surge, torque.z = yaw."""
         return cls(float(wrench["force"]["x"]), float(wrench["torque"]["z"]))
 

@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from schemas.catalogue import TOPICS
+from schemas.values import Message
 from simulator.config import GnssConfig, SimConfig
 from simulator.frames import Pose2D, sensor_pose_in_map
 from simulator.messages import diagonal_covariance, header
@@ -39,7 +40,7 @@ class Gnss:
                                  cfg.utm_zone)
         return float(lat), float(lon), float(cfg.water_level_altitude_m + z_m - water_level_m)
 
-    def message(self, fix: tuple[float, float, float], stamp_ns: int) -> dict:
+    def message(self, fix: tuple[float, float, float], stamp_ns: int) -> Message:
         """sensor_msgs/msg/NavSatFix with a diagonal covariance from the configured noise."""
         cfg = self.cfg
         horizontal, vertical = cfg.horizontal_noise_std_m**2, cfg.vertical_noise_std_m**2

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from schemas.catalogue import TOPICS
+from schemas.values import Message
 from simulator.config import ImuConfig, SimConfig
 from simulator.dynamics import StepResult
 from simulator.frames import mount_rotation, quaternion_from_matrix, rotation_z
@@ -57,7 +58,7 @@ class Imu:
         orientation = quaternion_from_matrix(rotation_z(yaw) @ self._mount_rotation)
         return ImuReading(orientation, gyro, accel)
 
-    def message(self, reading: ImuReading, stamp_ns: int) -> dict:
+    def message(self, reading: ImuReading, stamp_ns: int) -> Message:
         """sensor_msgs/msg/Imu, covariances from the configured white-noise levels."""
         cfg = self.cfg
         return {

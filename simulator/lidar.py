@@ -16,6 +16,7 @@ import numpy as np
 
 from schemas.catalogue import TOPICS
 from schemas.pointcloud import LAYOUTS, pack_points
+from schemas.values import Message
 from simulator.config import LidarConfig, SimConfig
 from simulator.frames import Pose2D, rotate_rows, sensor_pose_in_map
 from simulator.objects import WATER
@@ -138,7 +139,7 @@ class Lidar:
             keep[water] = cos_incidence >= self._cos_max_incidence
         return keep
 
-    def message(self, points: np.ndarray, stamp_ns: int) -> dict:
+    def message(self, points: np.ndarray, stamp_ns: int) -> Message:
         """sensor_msgs/msg/PointCloud2 of a scan (`point_fields`), stamped with its capture
         time."""
         return pack_points(points, stamp_ns, self.cfg.frame_id, LAYOUTS[self.cfg.point_fields])

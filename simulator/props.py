@@ -65,7 +65,8 @@ def instance(
     return moved.reshape(-1, 3), faces.reshape(-1, 3)
 
 
-def _part(template, material, positions, yaws, scales=None, first_id: int = 0) -> MeshPart:
+def _part(template: trimesh.Trimesh, material: Material, positions: np.ndarray,
+          yaws: np.ndarray, scales: np.ndarray | None = None, first_id: int = 0) -> MeshPart:
     """`template` instanced at `positions`; instance i is object first_id + i."""
     vertices, faces = instance(template, positions, yaws, scales)
     per_instance = len(template.faces)
@@ -90,7 +91,7 @@ def _vertex_ids(part: MeshPart) -> np.ndarray:
 
 def _box(extent_x: float, extent_y: float, extent_z: float, z_bottom: float) -> trimesh.Trimesh:
     """A box whose bottom face sits at `z_bottom` (local frame)."""
-    box = trimesh.creation.box(extents=(extent_x, extent_y, extent_z))
+    box: trimesh.Trimesh = trimesh.creation.box(extents=(extent_x, extent_y, extent_z))
     box.apply_translation((0.0, 0.0, z_bottom + extent_z / 2))
     return box
 
@@ -106,7 +107,8 @@ def _roof(extent_x: float, extent_y: float, z_eaves: float, rise: float) -> trim
     return trimesh.Trimesh(vertices=vertices, faces=faces, process=False)
 
 
-def _stage_sites(cfg: SceneConfig, course: RiverCourse, rng: np.random.Generator):
+def _stage_sites(cfg: SceneConfig, course: RiverCourse,
+                 rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Positions (k, 3), yaws (k,) and bank side (k,) of the landing stages, spread along y."""
     k = cfg.landing_stages
     y = np.linspace(-0.35, 0.35, k) * cfg.size_m + rng.uniform(-40, 40, k)
@@ -147,7 +149,8 @@ def landing_stages(cfg: SceneConfig, course: RiverCourse, rng: np.random.Generat
     return Props(parts, objects)
 
 
-def _land_sites(course, field, rng, count, near_m, far_m):
+def _land_sites(course: RiverCourse, field: HeightField, rng: np.random.Generator, count: int,
+                near_m: float, far_m: float) -> np.ndarray:
     """`count` points on land between `near_m` and `far_m` beyond the river banks."""
     y = rng.uniform(-0.45, 0.45, count) * (field.extent_m[1])
     offset = course.half_width_m + BANK_WIDTH_M + rng.uniform(near_m, far_m, count)
@@ -155,7 +158,8 @@ def _land_sites(course, field, rng, count, near_m, far_m):
     return np.column_stack([x, y, field.height_at(x, y)])
 
 
-def trees_and_houses(cfg: SceneConfig, course: RiverCourse, field: HeightField, rng,
+def trees_and_houses(cfg: SceneConfig, course: RiverCourse, field: HeightField,
+                     rng: np.random.Generator,
                      first_id: int = 0) -> Props:
     """Trees along the banks and houses a little further up the valley sides."""
     parts: list[MeshPart] = []

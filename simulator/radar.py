@@ -15,6 +15,7 @@ from typing import NamedTuple
 import numpy as np
 
 from schemas.catalogue import TOPICS
+from schemas.values import Message
 from simulator.config import RadarConfig, SimConfig
 from simulator.frames import Pose2D, rotate_rows, sensor_pose_in_map
 from simulator.messages import header
@@ -138,7 +139,7 @@ class Radar:
         named[cell[first]] = np.where(best < k, best, np.where(best == k, LAND, WATER))
         return named.reshape(geo.num_beams, geo.num_cells), object_rays
 
-    def message(self, image: np.ndarray, stamp_ns: int) -> dict:
+    def message(self, image: np.ndarray, stamp_ns: int) -> Message:
         """riverbridge_msgs/msg/RadarImage of a sweep, stamped with its capture time."""
         cfg, geo = self.cfg, self.geometry
         return {

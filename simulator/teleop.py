@@ -17,6 +17,7 @@ from dataclasses import dataclass
 
 from pydantic import BaseModel, ConfigDict, Field
 
+from schemas.values import Message
 from simulator.config import VesselConfig
 
 
@@ -124,7 +125,7 @@ class TeleopCommand:
     def yaw_moment_nm(self, scale: TeleopScale) -> float:
         return self.yaw_steps * scale.yaw_step_nm
 
-    def wrench(self, scale: TeleopScale) -> dict:
+    def wrench(self, scale: TeleopScale) -> Message:
         """Canonical geometry_msgs/msg/Wrench: force.x surge (N), torque.z yaw (N m)."""
         return {"force": {"x": self.surge_force_n(scale), "y": 0.0, "z": 0.0},
                 "torque": {"x": 0.0, "y": 0.0, "z": self.yaw_moment_nm(scale)}}

@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from schemas.values import Message
 from simulator.config import LidarConfig, RadarConfig
 from simulator.frames import Pose2D, quaternion_from_yaw, sensor_pose_in_map
 from simulator.messages import MAP_FRAME, header
@@ -102,7 +103,7 @@ def markers_msg(objects: SceneObjects, stamp_ns: int) -> dict[str, Any]:
     return {"markers": markers}
 
 
-def _marker(stamp_ns: int, ns: str, marker_id: int, pose: dict, scale: dict,
+def _marker(stamp_ns: int, ns: str, marker_id: int, pose: Message, scale: Message,
             rgb: tuple[float, float, float]) -> dict[str, Any]:
     """A canonical visualization_msgs/msg/Marker CUBE with every other field at its default."""
     return {

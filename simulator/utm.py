@@ -10,6 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import numpy.typing as npt
 
 UTM_SCALE = 0.9996  # k0 on the central meridian
 UTM_FALSE_EASTING_M = 500_000.0
@@ -66,7 +67,8 @@ def central_meridian_deg(zone: int) -> float:
     return 6.0 * zone - 183.0
 
 
-def tm_forward(lat_deg, lon_deg, lon0_deg: float, k0: float = UTM_SCALE,
+def tm_forward(lat_deg: npt.ArrayLike, lon_deg: npt.ArrayLike, lon0_deg: float,
+               k0: float = UTM_SCALE,
                ellipsoid: Ellipsoid = WGS84) -> tuple[np.ndarray, np.ndarray]:
     """Geodetic (lat, lon) -> transverse Mercator (x east, y north) metres, no false offsets."""
     n = ellipsoid.n
@@ -83,7 +85,7 @@ def tm_forward(lat_deg, lon_deg, lon0_deg: float, k0: float = UTM_SCALE,
     return scale * (eta_p + eta_terms @ alpha), scale * (xi_p + xi_terms @ alpha)
 
 
-def tm_inverse(x_m, y_m, lon0_deg: float, k0: float = UTM_SCALE,
+def tm_inverse(x_m: npt.ArrayLike, y_m: npt.ArrayLike, lon0_deg: float, k0: float = UTM_SCALE,
                ellipsoid: Ellipsoid = WGS84) -> tuple[np.ndarray, np.ndarray]:
     """Transverse Mercator (x east, y north) metres, no false offsets -> (lat, lon) degrees."""
     _, beta, delta = _series(ellipsoid.n)
@@ -98,14 +100,16 @@ def tm_inverse(x_m, y_m, lon0_deg: float, k0: float = UTM_SCALE,
     return np.degrees(phi), lon0_deg + np.degrees(lam)
 
 
-def utm_to_latlon(easting_m, northing_m, zone: int, northern: bool = True):
+def utm_to_latlon(easting_m: npt.ArrayLike, northing_m: npt.ArrayLike, zone: int,
+                  northern: bool = True) -> tuple[np.ndarray, np.ndarray]:
     """UTM (easting, northing) metres in `zone` -> (lat, lon) degrees on WGS84."""
     false_northing = 0.0 if northern else UTM_FALSE_NORTHING_SOUTH_M
     return tm_inverse(np.asarray(easting_m) - UTM_FALSE_EASTING_M,
                       np.asarray(northing_m) - false_northing, central_meridian_deg(zone))
 
 
-def latlon_to_utm(lat_deg, lon_deg, zone: int):
+def latlon_to_utm(lat_deg: npt.ArrayLike, lon_deg: npt.ArrayLike,
+                  zone: int) -> tuple[np.ndarray, np.ndarray]:
     """(lat, lon) degrees on WGS84 -> UTM (easting, northing) metres in `zone`."""
     x, y = tm_forward(lat_deg, lon_deg, central_meridian_deg(zone))
     false_northing = np.where(np.asarray(lat_deg) < 0, UTM_FALSE_NORTHING_SOUTH_M, 0.0)

@@ -11,6 +11,7 @@ from dataclasses import dataclass
 
 import cv2
 import numpy as np
+import numpy.typing as npt
 
 from simulator.config import SceneConfig
 from simulator.terrain import HeightField
@@ -32,16 +33,19 @@ class RiverCourse:
 
     def _phase(self, y_m: np.ndarray | float) -> np.ndarray:
         """(..., 2) phase of each sine at the given y."""
-        y = np.asarray(y_m, dtype=np.float64)[..., None]
-        return 2 * np.pi * y / np.asarray(self.wavelengths_m) + np.asarray(self.phases_rad)
+        y: npt.NDArray[np.float64] = np.asarray(y_m, dtype=np.float64)[..., None]
+        wavelengths_m = np.asarray(self.wavelengths_m, dtype=np.float64)
+        return 2 * np.pi * y / wavelengths_m + np.asarray(self.phases_rad, dtype=np.float64)
 
     def centre_x_m(self, y_m: np.ndarray | float) -> np.ndarray:
-        return (np.asarray(self.amplitudes_m) * np.sin(self._phase(y_m))).sum(axis=-1)
+        amplitudes_m = np.asarray(self.amplitudes_m, dtype=np.float64)
+        x_m: npt.NDArray[np.float64] = (amplitudes_m * np.sin(self._phase(y_m))).sum(axis=-1)
+        return x_m
 
     def heading_rad(self, y_m: np.ndarray | float) -> np.ndarray:
         """Direction of flow (towards +y) as a map yaw, counter-clockwise from +x."""
         gain = 2 * np.pi * np.asarray(self.amplitudes_m) / np.asarray(self.wavelengths_m)
-        slope = (gain * np.cos(self._phase(y_m))).sum(axis=-1)
+        slope: npt.NDArray[np.float64] = (gain * np.cos(self._phase(y_m))).sum(axis=-1)
         return np.arctan2(1.0, slope)
 
 

@@ -12,17 +12,21 @@ from __future__ import annotations
 import argparse
 import sys
 import threading
+from collections.abc import Callable
+from typing import Any
 
 import roslibpy
 
+Message = dict[str, Any]
+
 
 def wait_for(ros: roslibpy.Ros, topic: str, type_name: str, count: int, timeout_s: float,
-             show) -> bool:
+             show: Callable[[Message], str]) -> bool:
     """Subscribe, print ``count`` messages with ``show``, unsubscribe; False on timeout."""
-    seen: list[dict] = []
+    seen: list[Message] = []
     done = threading.Event()
 
-    def on_message(msg: dict) -> None:
+    def on_message(msg: Message) -> None:
         seen.append(msg)
         print(f"{topic}: {show(msg)}", flush=True)
         if len(seen) >= count:
@@ -36,14 +40,14 @@ def wait_for(ros: roslibpy.Ros, topic: str, type_name: str, count: int, timeout_
         listener.unsubscribe()
 
 
-def imu_summary(msg: dict) -> str:
+def imu_summary(msg: Message) -> str:
     rate = msg["angular_velocity"]
     accel = msg["linear_acceleration"]
     return (f"yaw rate {rate['z']:+.3f} rad/s, accel z {accel['z']:+.2f} m/s^2, "
             f"stamp {msg['header']['stamp']['sec']}.{msg['header']['stamp']['nanosec']:09d}")
 
 
-def grid_summary(msg: dict) -> str:
+def grid_summary(msg: Message) -> str:
     info = msg["info"]
     occupied = msg["data"].count(100)
     size = f"{info['width']}x{info['height']} cells of {info['resolution']:.2f} m"

@@ -110,7 +110,8 @@ class McapRecording:
         """Close the open chunk if it is older than ``flush_period_s``."""
         now = time.monotonic()
         if now - self._last_flush >= self.flush_period_s:
-            self._writer.flush()  # closes the chunk and flushes the file
+            # closes the chunk and flushes the file (mcap's Writer.flush has no annotations)
+            self._writer.flush()  # type: ignore[no-untyped-call]
             self._last_flush = now
 
     def close(self) -> None:
@@ -119,6 +120,6 @@ class McapRecording:
             return
         self._closed = True
         try:
-            self._writer.finish()
+            self._writer.finish()  # type: ignore[no-untyped-call]  # mcap: not annotated
         finally:
             self._file.close()

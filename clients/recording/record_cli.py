@@ -18,7 +18,7 @@ import sys
 from pathlib import Path
 
 from clients.errors import ConnectionFailed
-from clients.recording.mcap_file import COMPRESSIONS
+from clients.recording.mcap_file import COMPRESSIONS, TopicCounts
 from clients.recording.recorder import Recorder
 from clients.recording.topics import TopicFilter, check_patterns
 from clients.stack.node_cli import run_until_stopped
@@ -79,7 +79,7 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def summary(recorder: Recorder, counts: dict) -> str:
+def summary(recorder: Recorder, counts: dict[str, TopicCounts]) -> str:
     lines = [f"wrote {recorder.output}: {recorder.stats.messages} messages, "
              f"{recorder.stats.bytes / 1e6:.1f} MB on {len(counts)} topics"]
     lines += [f"  {topic:<32} {c.messages:>7} msgs {c.bytes / 1e6:>9.2f} MB  {c.type_name}"
@@ -98,7 +98,7 @@ def main(argv: list[str] | None = None) -> int:
                         format="%(asctime)s %(levelname)s %(name)s: %(message)s")
     recorder = Recorder(args.bridge, args.output, topics=TopicFilter(tuple(args.topics)),
                         compression=args.compression, connect_timeout_s=args.connect_timeout)
-    counts: dict = {}
+    counts: dict[str, TopicCounts] = {}
 
     async def serve(stop: asyncio.Event) -> None:
         counts.update(await recorder.run(stop))

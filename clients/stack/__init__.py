@@ -5,5 +5,5 @@ navigation service as local processes (:mod:`clients.stack.launcher`), restarts 
 that dies (:mod:`clients.stack.restarts`) and decides readiness through the bridge
 (:mod:`clients.stack.healthcheck`, also docker compose's health check). The simulator's and
 navigation's command lines and connections are :mod:`clients.stack.node_cli` and
-:mod:`clients.stack.node_links`. README.md in this folder is the map.
+:mod:`clients.stack.node_links`. clients/README.md is the map.
 """

@@ -20,6 +20,9 @@ Design (asyncio subprocesses, one event loop, no threads of our own):
   counted on the latched ``/riverbridge/restarts`` topic (dashboard, ``GET /metrics``).
 - Whatever ends the run (a signal, a child exiting with ``restart never``, a start-up
   timeout), every child gets SIGINT, then SIGTERM and SIGKILL after ``stop_timeout_s`` each.
+  A child that serves must exit 0 on that SIGINT, else the shutdown is unclean (exit 1); one
+  still starting (at start-up, or restarted and not yet serving again) has no handler yet and
+  dies of it, which is the stop asked for: a user's stop during a restart exits 0.
 """
 
 from __future__ import annotations
@@ -293,6 +296,9 @@ class Child:
     port: asyncio.Future[int] = field(default_factory=lambda: asyncio.get_running_loop()
                                       .create_future())
     started_s: float = field(default_factory=time.monotonic)
+    # Serving (the bridge answers /version; a client's topics have publishers): from then on
+    # the child handles SIGINT itself, so dying of it is a failure, not a stop while starting.
+    ready: bool = False
     _pump: asyncio.Task[None] | None = None
 
     @classmethod
@@ -425,11 +431,14 @@ class Supervisor:
         self._bridge_port = port
         self.url = ws_url(connect_host(self._config.host), port, self._config.scheme)
         await self._guard(self._probe_version(), stop, deadline, waiting_for=self._bridge.title)
+        bridge.ready = True
         log.info("%s ready at %s", self._bridge.title, self.url)
         for component in self._clients:
             await self._spawn(component)
-        await self._guard(self._probe_clients(), stop, deadline,
+        await self._guard(self._probe_clients(self._clients), stop, deadline,
                           waiting_for=", ".join(c.title for c in self._clients))
+        for child in self.children:
+            child.ready = True
 
     async def _spawn(self, component: Component) -> Child:
         child = await Child.start(component, self.url, self._env, self._output)
@@ -475,9 +484,33 @@ class Supervisor:
         await asyncio.sleep(delay_s)
         if component.name == self._bridge.name:  # same port: the clients reconnect to it
             component = with_port(component, self._bridge_port)
-        await self._spawn(component)
+        child = await self._spawn(component)
         self._changed.set()
         await self.ledger.publish()
+        await self._settle(child)
+
+    async def _settle(self, child: Child) -> None:
+        """Mark a restarted `child` ready once it serves again (or give up if it exits)."""
+        if child.component.name == self._bridge.name:
+            probe = asyncio.ensure_future(self._probe_version())
+        else:
+            probe = asyncio.ensure_future(self._probe_until_served(child.component))
+        exited = asyncio.ensure_future(child.wait())
+        try:
+            await asyncio.wait({probe, exited}, return_when=asyncio.FIRST_COMPLETED)
+            child.ready = probe.done() and not probe.cancelled() and probe.exception() is None
+        finally:
+            for task in (probe, exited):
+                task.cancel()
+            await asyncio.gather(probe, exited, return_exceptions=True)
+
+    async def _probe_until_served(self, component: Component) -> None:
+        """`_probe_clients` for one component, retried while the bridge is away."""
+        while True:
+            with contextlib.suppress(RosbridgeError):
+                await self._probe_clients((component,))
+                return
+            await asyncio.sleep(_POLL_S)
 
 
     async def _probe_version(self) -> None:
@@ -487,9 +520,9 @@ class Supervisor:
                 return
             await asyncio.sleep(_POLL_S)
 
-    async def _probe_clients(self) -> None:
-        """Poll ``/rosapi/publishers`` until every client component's topics have one."""
-        pending = {c.title: c.topics for c in self._clients}
+    async def _probe_clients(self, components: Sequence[Component]) -> None:
+        """Poll ``/rosapi/publishers`` until every topic of `components` has a publisher."""
+        pending = {c.title: c.topics for c in components}
         self._missing = dict(pending)
         async with RosbridgeClient(self.url, encoding="json", name="up-probe", reconnect=False,
                                    transport=client_transport(self._config)) as probe:
@@ -544,6 +577,13 @@ class Supervisor:
         for group in (clients, bridge):
             results = await asyncio.gather(*(child.stop(timeout_s) for child in group))
             for child, code in zip(group, results, strict=True):
-                log.info("%s", describe_exit(child.component.title, code))
-                codes[child.component.title] = code
+                title = child.component.title
+                if not child.ready and -code in (signal.SIGINT, signal.SIGTERM):
+                    # Stopped before it handled signals (still importing, just restarted):
+                    # it ended on our request, which is what a user's stop asks for.
+                    log.info("%s stopped while starting (%s)", title, signal.Signals(-code).name)
+                    code = 0
+                else:
+                    log.info("%s", describe_exit(title, code))
+                codes[title] = code
         return codes

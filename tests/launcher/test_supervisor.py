@@ -165,3 +165,48 @@ async def test_killed_components_are_restarted_counted_and_work(output: io.Strin
         in text
     assert "bridge was killed by SIGKILL (exit code -9); restarting it in 0.25 s" in text
     assert wait_gone(harness.pids()) == []
+
+
+async def _respawned(harness: Harness, title: str, old_pid: int) -> int:
+    """The pid of `title` once the supervisor has started it again."""
+    while True:
+        pids = [c.pid for c in harness.supervisor.children if c.component.title == title]
+        if pids and pids[0] != old_pid:
+            return pids[0]
+        await asyncio.sleep(0.005)
+
+
+@pytest.mark.parametrize("when", ["waiting to restart", "just restarted"])
+async def test_a_stop_during_a_restart_exits_0_leaving_no_process(
+        output: io.StringIO, when: str) -> None:
+    """A user's stop is a clean stop even while a component is being restarted: during the
+    backoff delay, or while the new process is still starting (its imports, before it handles
+    SIGINT itself)."""
+    harness = Harness(bridge_and_navigation(), CONFIG, output)
+    await asyncio.wait_for(asyncio.shield(harness.ready), 180.0)
+    [nav] = [c for c in harness.supervisor.children if c.component.title == "navigation"]
+    os.kill(nav.pid, signal.SIGKILL)
+    if when == "waiting to restart":
+        while "restarting it in" not in output.getvalue():
+            await asyncio.sleep(0.005)
+    else:
+        await asyncio.wait_for(_respawned(harness, "navigation", nav.pid), 30.0)
+    harness.stop.set()
+    assert await harness.finish() == 0, output.getvalue()
+    assert wait_gone(harness.pids()) == []
+    if when == "just restarted":
+        assert "navigation stopped while starting (SIGINT)" in output.getvalue()
+
+
+async def test_a_serving_component_that_dies_of_the_stop_signal_is_an_unclean_stop(
+        output: io.StringIO) -> None:
+    """Only a component still starting may end by the SIGINT that stops it: one that serves
+    must handle it (exit 0), or `up` says so and exits 1."""
+    bridge, _ = bridge_and_navigation()
+    harness = Harness([bridge, Component("raw", "raw", "tests.launcher.no_sigint_handler", ())],
+                      CONFIG, output)
+    await asyncio.wait_for(asyncio.shield(harness.ready), 180.0)
+    harness.stop.set()
+    assert await harness.finish() == 1
+    assert "unclean shutdown: raw was killed by SIGINT (exit code -2)" in output.getvalue()
+    assert wait_gone(harness.pids()) == []
