@@ -17,11 +17,15 @@ SUBCOMMANDS: dict[str, tuple[str, str]] = {
     "nav": ("navigation.cli", "run the navigation service against a bridge"),
     "teleop": ("simulator.teleop_cli", "steer the simulated vessel from the keyboard"),
     "up": ("clients.stack.up_cli", "run bridge, simulator and navigation as three local processes"),
-    "report": ("clients.report.cli", "measure latency and bytes per topic and stage, next to "
-               "the thesis's figures"),
+    "report": (
+        "clients.report.cli",
+        "measure latency and bytes per topic and stage, next to the thesis's figures",
+    ),
     "record": ("clients.recording.record_cli", "record a bridge's topics into an MCAP file"),
-    "play": ("clients.recording.play_cli", "publish an MCAP recording into a bridge at its "
-             "recorded timing"),
+    "play": (
+        "clients.recording.play_cli",
+        "publish an MCAP recording into a bridge at its recorded timing",
+    ),
 }
 
 

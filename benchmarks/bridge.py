@@ -31,17 +31,30 @@ import websockets
 
 from schemas import codec_cbor, codec_json
 
-TUNED_MALLOC = {"MALLOC_MMAP_THRESHOLD_": "268435456", "MALLOC_TRIM_THRESHOLD_": "1073741824",
-                "MALLOC_TOP_PAD_": "67108864"}
+TUNED_MALLOC = {
+    "MALLOC_MMAP_THRESHOLD_": "268435456",
+    "MALLOC_TRIM_THRESHOLD_": "1073741824",
+    "MALLOC_TOP_PAD_": "67108864",
+}
 CLOUD_POINTS = 262_144  # x, y, z, intensity float32 -> 4,194,304 B of data
 
 
 def cloud_message(stamp_ns: int, data: bytes) -> dict:
-    fields = [{"name": n, "offset": 4 * i, "datatype": 7, "count": 1}
-              for i, n in enumerate(["x", "y", "z", "intensity"])]
-    return {"header": {"stamp": stamp(stamp_ns), "frame_id": "lidar"}, "height": 1,
-            "width": CLOUD_POINTS, "fields": fields, "is_bigendian": False, "point_step": 16,
-            "row_step": 16 * CLOUD_POINTS, "data": data, "is_dense": True}
+    fields = [
+        {"name": n, "offset": 4 * i, "datatype": 7, "count": 1}
+        for i, n in enumerate(["x", "y", "z", "intensity"])
+    ]
+    return {
+        "header": {"stamp": stamp(stamp_ns), "frame_id": "lidar"},
+        "height": 1,
+        "width": CLOUD_POINTS,
+        "fields": fields,
+        "is_bigendian": False,
+        "point_step": 16,
+        "row_step": 16 * CLOUD_POINTS,
+        "data": data,
+        "is_dense": True,
+    }
 
 
 def stamp(ns: int) -> dict:
@@ -74,9 +87,12 @@ def decode(frame: bytes | str) -> dict:
 async def start_bridge(tuned: bool, offload: bool) -> tuple[subprocess.Popen, str]:
     env = {**os.environ, **(TUNED_MALLOC if tuned else {})}
     extra = [] if offload else ["--offload-threshold", str(1 << 40)]
-    process = subprocess.Popen([sys.executable, "-m", "bridge", "--port", "0",
-                                "--log-level", "warning", *extra], stderr=subprocess.PIPE,
-                               env=env, text=True)
+    process = subprocess.Popen(
+        [sys.executable, "-m", "bridge", "--port", "0", "--log-level", "warning", *extra],
+        stderr=subprocess.PIPE,
+        env=env,
+        text=True,
+    )
     assert process.stderr is not None
     while True:
         line = await asyncio.to_thread(process.stderr.readline)
@@ -89,8 +105,11 @@ async def start_bridge(tuned: bool, offload: bool) -> tuple[subprocess.Popen, st
 
 async def subscribe(url: str, topic: str, type_name: str, compression: str):
     ws = await websockets.connect(url, max_size=None, compression=None)
-    await ws.send(json.dumps({"op": "subscribe", "topic": topic, "type": type_name,
-                              "compression": compression}))
+    await ws.send(
+        json.dumps(
+            {"op": "subscribe", "topic": topic, "type": type_name, "compression": compression}
+        )
+    )
     await ws.send(json.dumps({"op": "call_service", "service": "/rosapi/get_time", "id": "s"}))
     while not isinstance(frame := await ws.recv(), str) or '"service_response"' not in frame:
         pass
@@ -100,15 +119,20 @@ async def subscribe(url: str, topic: str, type_name: str, compression: str):
 async def cloud_latency(url: str, binary: bool, subscribers: int, count: int) -> list[float]:
     """ms from publish to decoded on the last of `subscribers`, one message in flight."""
     compression = "cbor" if binary else "none"
-    subs = [await subscribe(url, "/lidar", "sensor_msgs/msg/PointCloud2", compression)
-            for _ in range(subscribers)]
+    subs = [
+        await subscribe(url, "/lidar", "sensor_msgs/msg/PointCloud2", compression)
+        for _ in range(subscribers)
+    ]
     pub = await websockets.connect(url, max_size=None, compression=None)
     data = np.random.default_rng(0).random(CLOUD_POINTS * 4, dtype=np.float32).tobytes()
     latencies = []
     for _ in range(count + 2):
         sent_ns = time.time_ns()
-        await pub.send(encode({"op": "publish", "topic": "/lidar",
-                               "msg": cloud_message(sent_ns, data)}, binary))
+        await pub.send(
+            encode(
+                {"op": "publish", "topic": "/lidar", "msg": cloud_message(sent_ns, data)}, binary
+            )
+        )
         for ws in subs:
             message = decode(await ws.recv())
             assert stamp_ns(message["msg"]) == sent_ns
@@ -131,8 +155,16 @@ async def imu_under_load(url: str, seconds: float) -> list[float]:
 
     async def stream_cloud() -> None:
         while time.monotonic() < end:
-            await pub.send(encode({"op": "publish", "topic": "/lidar",
-                                   "msg": cloud_message(time.time_ns(), data)}, True))
+            await pub.send(
+                encode(
+                    {
+                        "op": "publish",
+                        "topic": "/lidar",
+                        "msg": cloud_message(time.time_ns(), data),
+                    },
+                    True,
+                )
+            )
             await asyncio.sleep(0.2)
 
     async def drain_cloud() -> None:
@@ -162,23 +194,34 @@ async def imu_under_load(url: str, seconds: float) -> list[float]:
 
 def summary(name: str, latencies: list[float]) -> str:
     p90, p99 = (float(np.percentile(latencies, q)) for q in (90, 99))
-    return (f"{name:<52} median {statistics.median(latencies):7.2f}  p90 {p90:7.2f}  "
-            f"p99 {p99:7.2f}  max {max(latencies):7.2f} ms  n={len(latencies)}")
+    return (
+        f"{name:<52} median {statistics.median(latencies):7.2f}  p90 {p90:7.2f}  "
+        f"p99 {p99:7.2f}  max {max(latencies):7.2f} ms  n={len(latencies)}"
+    )
 
 
 async def run(count: int, tuned: bool, offload: bool) -> None:
     process, url = await start_bridge(tuned, offload)
     try:
-        print(f"bridge at {url}: {'tuned' if tuned else 'default'} malloc, large codec work "
-              f"{'in worker threads' if offload else 'on the event loop'}; "
-              f"cloud {CLOUD_POINTS * 16 / 1e6:.2f} MB")
+        print(
+            f"bridge at {url}: {'tuned' if tuned else 'default'} malloc, large codec work "
+            f"{'in worker threads' if offload else 'on the event loop'}; "
+            f"cloud {CLOUD_POINTS * 16 / 1e6:.2f} MB"
+        )
         print(summary("PointCloud2 4 MB, CBOR -> CBOR", await cloud_latency(url, True, 1, count)))
-        print(summary("PointCloud2 4 MB, JSON -> JSON",
-                      await cloud_latency(url, False, 1, count)))
-        print(summary("Imu 100 Hz while 4 MB cloud streams 5 Hz to JSON sub",
-                      await imu_under_load(url, max(5.0, count / 5))))
-        print(summary("PointCloud2 4 MB, CBOR fan-out to 4 (last one)",
-                      await cloud_latency(url, True, 4, count)))
+        print(summary("PointCloud2 4 MB, JSON -> JSON", await cloud_latency(url, False, 1, count)))
+        print(
+            summary(
+                "Imu 100 Hz while 4 MB cloud streams 5 Hz to JSON sub",
+                await imu_under_load(url, max(5.0, count / 5)),
+            )
+        )
+        print(
+            summary(
+                "PointCloud2 4 MB, CBOR fan-out to 4 (last one)",
+                await cloud_latency(url, True, 4, count),
+            )
+        )
     finally:
         process.terminate()
         process.wait(10)
@@ -187,10 +230,16 @@ async def run(count: int, tuned: bool, offload: bool) -> None:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--messages", type=int, default=30, help="clouds per case")
-    parser.add_argument("--no-offload", action="store_true",
-                        help="encode and decode everything on the bridge's event loop")
-    parser.add_argument("--default-malloc", action="store_true",
-                        help="run the bridge without the tuned glibc malloc thresholds")
+    parser.add_argument(
+        "--no-offload",
+        action="store_true",
+        help="encode and decode everything on the bridge's event loop",
+    )
+    parser.add_argument(
+        "--default-malloc",
+        action="store_true",
+        help="run the bridge without the tuned glibc malloc thresholds",
+    )
     args = parser.parse_args(argv)
     tuned = not args.default_malloc
     if tuned and argv is None and not all(k in os.environ for k in TUNED_MALLOC):

@@ -46,37 +46,76 @@ def _goal(p: ClientProtocol) -> str:
 
 #: (op, setup run untimed before each call and returning the call's argument, the timed call).
 OPS: list[tuple[str, Setup, Callable[[ClientProtocol, Any], Frame | None]]] = [
-    ("advertise", lambda p: p.unadvertise("/chat"),
-     lambda p, _: p.advertise("/chat", "std_msgs/msg/String")),
-    ("unadvertise", lambda p: p.advertise("/chat", "std_msgs/msg/String"),
-     lambda p, _: p.unadvertise("/chat")),
-    ("subscribe", lambda p: [p.unsubscribe(s) for s in list(p.subscriptions)],
-     lambda p, _: p.subscribe("/imu", "sensor_msgs/msg/Imu")[1]),
+    (
+        "advertise",
+        lambda p: p.unadvertise("/chat"),
+        lambda p, _: p.advertise("/chat", "std_msgs/msg/String"),
+    ),
+    (
+        "unadvertise",
+        lambda p: p.advertise("/chat", "std_msgs/msg/String"),
+        lambda p, _: p.unadvertise("/chat"),
+    ),
+    (
+        "subscribe",
+        lambda p: [p.unsubscribe(s) for s in list(p.subscriptions)],
+        lambda p, _: p.subscribe("/imu", "sensor_msgs/msg/Imu")[1],
+    ),
     ("unsubscribe", _subscribed, lambda p, sub_id: p.unsubscribe(sub_id)),
-    ("call_service", lambda p: None,
-     lambda p, _: p.call_service("/add", {"a": 1, "b": 2}, timeout_s=2.0)[1]),
-    ("advertise_service", lambda p: None,
-     lambda p, _: p.advertise_service("/add", "example/srv/AddTwoInts")),
-    ("unadvertise_service", lambda p: p.advertise_service("/add", "example/srv/AddTwoInts"),
-     lambda p, _: p.unadvertise_service("/add")),
-    ("service_response", lambda p: None,
-     lambda p, _: p.service_response(REQUEST, {"sum": 3}, result=True)),
-    ("send_action_goal", lambda p: None,
-     lambda p, _: p.send_action_goal("/fib", "example/action/Fibonacci", {"order": 4})[1]),
+    (
+        "call_service",
+        lambda p: None,
+        lambda p, _: p.call_service("/add", {"a": 1, "b": 2}, timeout_s=2.0)[1],
+    ),
+    (
+        "advertise_service",
+        lambda p: None,
+        lambda p, _: p.advertise_service("/add", "example/srv/AddTwoInts"),
+    ),
+    (
+        "unadvertise_service",
+        lambda p: p.advertise_service("/add", "example/srv/AddTwoInts"),
+        lambda p, _: p.unadvertise_service("/add"),
+    ),
+    (
+        "service_response",
+        lambda p: None,
+        lambda p, _: p.service_response(REQUEST, {"sum": 3}, result=True),
+    ),
+    (
+        "send_action_goal",
+        lambda p: None,
+        lambda p, _: p.send_action_goal("/fib", "example/action/Fibonacci", {"order": 4})[1],
+    ),
     ("cancel_action_goal", _goal, lambda p, goal_id: p.cancel_action_goal(goal_id)),
-    ("advertise_action", lambda p: None,
-     lambda p, _: p.advertise_action("/fib", "example/action/Fibonacci")),
-    ("unadvertise_action", lambda p: p.advertise_action("/fib", "example/action/Fibonacci"),
-     lambda p, _: p.unadvertise_action("/fib")),
-    ("action_feedback", lambda p: None,
-     lambda p, _: p.action_feedback(GOAL, {"partial": [0, 1, 1]})),
-    ("action_result", lambda p: None,
-     lambda p, _: p.action_result(GOAL, {"sequence": [0, 1, 1, 2]}, status=4, result=True)),
+    (
+        "advertise_action",
+        lambda p: None,
+        lambda p, _: p.advertise_action("/fib", "example/action/Fibonacci"),
+    ),
+    (
+        "unadvertise_action",
+        lambda p: p.advertise_action("/fib", "example/action/Fibonacci"),
+        lambda p, _: p.unadvertise_action("/fib"),
+    ),
+    (
+        "action_feedback",
+        lambda p: None,
+        lambda p, _: p.action_feedback(GOAL, {"partial": [0, 1, 1]}),
+    ),
+    (
+        "action_result",
+        lambda p: None,
+        lambda p, _: p.action_result(GOAL, {"sequence": [0, 1, 1, 2]}, status=4, result=True),
+    ),
 ]
 
 
-def median_us(call: Callable[[], object], repeats: int, setup: Callable[[], object] | None = None,
-              ) -> float:
+def median_us(
+    call: Callable[[], object],
+    repeats: int,
+    setup: Callable[[], object] | None = None,
+) -> float:
     """Median wall time of ``call`` in µs over ``repeats`` calls (``setup`` untimed before each)."""
     times = []
     for _ in range(repeats):
@@ -95,12 +134,16 @@ def op_rows(registry: TypeRegistry, repeats: int) -> list[tuple[str, float, floa
         proto = ClientProtocol(encoding="json", spec_lookup=registry.message)
         state: list[Any] = [None]
 
-        def prepare(proto: ClientProtocol = proto, setup: Setup = setup,
-                    state: list[Any] = state) -> None:
+        def prepare(
+            proto: ClientProtocol = proto, setup: Setup = setup, state: list[Any] = state
+        ) -> None:
             state[0] = setup(proto)
 
-        def call(proto: ClientProtocol = proto, build: Any = build, state: list[Any] = state,
-                 ) -> Frame | None:
+        def call(
+            proto: ClientProtocol = proto,
+            build: Any = build,
+            state: list[Any] = state,
+        ) -> Frame | None:
             return build(proto, state[0])
 
         prepare()
@@ -108,40 +151,61 @@ def op_rows(registry: TypeRegistry, repeats: int) -> list[tuple[str, float, floa
         assert frame is not None, name
         plain = orjson.loads(frame.data)
         assert plain["op"] == name, (name, plain)
-        rows.append((name, median_us(call, repeats, prepare),
-                     median_us(lambda plain=plain: codec_json.dumps(plain), repeats)))
+        rows.append(
+            (
+                name,
+                median_us(call, repeats, prepare),
+                median_us(lambda plain=plain: codec_json.dumps(plain), repeats),
+            )
+        )
     return rows
 
 
 def imu_message(registry: TypeRegistry) -> dict[str, Any]:
     """A sensor_msgs/Imu in canonical form (covariances as float64 arrays): ~200 B of JSON."""
-    raw = {"header": {"stamp": {"sec": 1_700_000_000, "nanosec": 5}, "frame_id": "imu"},
-           "orientation": {"x": 0.0, "y": 0.0, "z": 0.3826834, "w": 0.9238795},
-           "orientation_covariance": np.eye(3).ravel() * 1e-3,
-           "angular_velocity": {"x": 0.01, "y": -0.02, "z": 0.1},
-           "angular_velocity_covariance": np.eye(3).ravel() * 1e-4,
-           "linear_acceleration": {"x": 0.2, "y": 0.0, "z": 9.81},
-           "linear_acceleration_covariance": np.eye(3).ravel() * 1e-2}
+    raw = {
+        "header": {"stamp": {"sec": 1_700_000_000, "nanosec": 5}, "frame_id": "imu"},
+        "orientation": {"x": 0.0, "y": 0.0, "z": 0.3826834, "w": 0.9238795},
+        "orientation_covariance": np.eye(3).ravel() * 1e-3,
+        "angular_velocity": {"x": 0.01, "y": -0.02, "z": 0.1},
+        "angular_velocity_covariance": np.eye(3).ravel() * 1e-4,
+        "linear_acceleration": {"x": 0.2, "y": 0.0, "z": 9.81},
+        "linear_acceleration_covariance": np.eye(3).ravel() * 1e-2,
+    }
     return normalize(registry.message("sensor_msgs/msg/Imu"), raw, now_ns=0)
 
 
-def publish_rows(registry: TypeRegistry, points: int, repeats: int,
-                 big_repeats: int) -> list[tuple[str, float, float, int]]:
+def publish_rows(
+    registry: TypeRegistry, points: int, repeats: int, big_repeats: int
+) -> list[tuple[str, float, float, int]]:
     """(case, µs of encode_publish, µs of schemas.frames.publish_*, frame bytes)."""
-    cloud = normalize(registry.message("sensor_msgs/msg/PointCloud2"),
-                      pack_points(np.random.default_rng(0).random((points, 4), dtype=np.float32),
-                                  1_700_000_000 * 10**9, "lidar"), now_ns=0)
-    cases = [("Imu", "/imu", imu_message(registry), repeats),
-             (f"PointCloud2 {points} pts", "/lidar", cloud, big_repeats)]
+    cloud = normalize(
+        registry.message("sensor_msgs/msg/PointCloud2"),
+        pack_points(
+            np.random.default_rng(0).random((points, 4), dtype=np.float32),
+            1_700_000_000 * 10**9,
+            "lidar",
+        ),
+        now_ns=0,
+    )
+    cases = [
+        ("Imu", "/imu", imu_message(registry), repeats),
+        (f"PointCloud2 {points} pts", "/lidar", cloud, big_repeats),
+    ]
     plain = {"json": frames.publish_json, "cbor": frames.publish_cbor}
     rows = []
     for label, topic, msg, n in cases:
         for encoding in ("json", "cbor"):
             proto = ClientProtocol(encoding=encoding, spec_lookup=registry.message)
             size = len(proto.encode_publish(topic, msg).data)
-            rows.append((f"publish {label} {encoding}",
-                         median_us(lambda p=proto, t=topic, m=msg: p.encode_publish(t, m), n),
-                         median_us(lambda f=plain[encoding], t=topic, m=msg: f(t, m), n), size))
+            rows.append(
+                (
+                    f"publish {label} {encoding}",
+                    median_us(lambda p=proto, t=topic, m=msg: p.encode_publish(t, m), n),
+                    median_us(lambda f=plain[encoding], t=topic, m=msg: f(t, m), n),
+                    size,
+                )
+            )
     return rows
 
 
@@ -155,10 +219,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     print(f"{'op':36s} {'frame µs':>10s} {'dumps µs':>10s} {'ratio':>6s}")
     for name, built, dumped in op_rows(registry, args.repeats):
         print(f"{name:36s} {built:10.2f} {dumped:10.2f} {built / dumped:6.2f}")
-    print(f"{'publish (encode_publish vs frames)':36s} {'client µs':>10s} {'frames µs':>10s}"
-          f" {'ratio':>6s} {'bytes':>10s}")
-    for name, client, shared, size in publish_rows(registry, args.points, args.repeats,
-                                                   args.big_repeats):
+    print(
+        f"{'publish (encode_publish vs frames)':36s} {'client µs':>10s} {'frames µs':>10s}"
+        f" {'ratio':>6s} {'bytes':>10s}"
+    )
+    for name, client, shared, size in publish_rows(
+        registry, args.points, args.repeats, args.big_repeats
+    ):
         print(f"{name:36s} {client:10.1f} {shared:10.1f} {client / shared:6.2f} {size:10d}")
     return 0
 

@@ -43,9 +43,14 @@ def started_stack() -> Iterator[str]:
         log_path = Path(folder) / "up.log"
         with log_path.open("w") as log:
             process = subprocess.Popen(
-                [sys.executable, "-m", "clients.stack.up_cli", "--port", "0"], cwd=REPO_ROOT,
-                env=stack_env(), stdin=subprocess.DEVNULL, stdout=log, stderr=subprocess.STDOUT,
-                start_new_session=True)
+                [sys.executable, "-m", "clients.stack.up_cli", "--port", "0"],
+                cwd=REPO_ROOT,
+                env=stack_env(),
+                stdin=subprocess.DEVNULL,
+                stdout=log,
+                stderr=subprocess.STDOUT,
+                start_new_session=True,
+            )
         try:
             yield wait_ready(process, log_path)
         finally:
@@ -78,8 +83,12 @@ def stop(process: subprocess.Popen[bytes]) -> None:
 
 def measure(url: str, seconds: float) -> dict:
     """Run the browser recorder for `seconds`; its JSON result."""
-    result = subprocess.run(["node", str(MEASURE_SCRIPT), url, str(seconds)],
-                            capture_output=True, text=True, timeout=seconds + 180)
+    result = subprocess.run(
+        ["node", str(MEASURE_SCRIPT), url, str(seconds)],
+        capture_output=True,
+        text=True,
+        timeout=seconds + 180,
+    )
     lines = result.stdout.strip().splitlines()
     if not lines:
         raise RuntimeError(f"measure_frames.mjs printed nothing:\n{result.stderr}")
@@ -92,8 +101,9 @@ def measure(url: str, seconds: float) -> dict:
 def heap_floor_trend(heap: np.ndarray, window_s: float) -> tuple[np.ndarray, float]:
     """Per-window minima of `heap : (n, 2)` (t_s, bytes) and their slope in MiB/min."""
     windows = np.floor(heap[:, 0] / window_s).astype(int)
-    floors = np.array([[heap[windows == w, 0].mean(), heap[windows == w, 1].min()]
-                       for w in np.unique(windows)])
+    floors = np.array(
+        [[heap[windows == w, 0].mean(), heap[windows == w, 1].min()] for w in np.unique(windows)]
+    )
     if len(floors) < 2:
         return floors, float("nan")
     slope_bytes_per_s = np.polyfit(floors[:, 0], floors[:, 1], 1)[0]
@@ -130,10 +140,17 @@ def report(recorded: dict) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--minutes", type=float, default=1.0,
-                        help="how long to record (default %(default)s; 10 for the soak)")
-    parser.add_argument("--url", help="dashboard of a running stack, e.g. http://127.0.0.1:9090/; "
-                                      "default: start `riverbridge up` on a free port")
+    parser.add_argument(
+        "--minutes",
+        type=float,
+        default=1.0,
+        help="how long to record (default %(default)s; 10 for the soak)",
+    )
+    parser.add_argument(
+        "--url",
+        help="dashboard of a running stack, e.g. http://127.0.0.1:9090/; "
+        "default: start `riverbridge up` on a free port",
+    )
     args = parser.parse_args(argv)
     seconds = args.minutes * 60
     if args.url:

@@ -48,8 +48,11 @@ SCAN_POINTS = 345_600  # Table 4.3: 1440 x 240 rays at 0.25 degrees
 POINT_STEP = 16  # x, y, z, intensity float32
 SCAN_HZ, IMU_HZ = 2.0, 50.0
 WARMUP_S = 4.0  # discovery and first-message set-up are not what is measured
-TUNED_MALLOC = {"MALLOC_MMAP_THRESHOLD_": "268435456", "MALLOC_TRIM_THRESHOLD_": "1073741824",
-                "MALLOC_TOP_PAD_": "67108864"}
+TUNED_MALLOC = {
+    "MALLOC_MMAP_THRESHOLD_": "268435456",
+    "MALLOC_TRIM_THRESHOLD_": "1073741824",
+    "MALLOC_TOP_PAD_": "67108864",
+}
 LISTENING = r"listening on ws://127\.0\.0\.1:(?P<port>\d+)"
 CASES = ("one-bridge", "dds-lo", "dds-veth", "dds-wlan")
 # FL WLAN 1101 (thesis Table 3.1) is IEEE 802.11n, 300 Mbit/s gross: about half of that as
@@ -60,22 +63,34 @@ EXTRA_BRIDGE_ARGS: list[str] = []  # --untuned adds --dds-untuned
 
 # -- the two clients (run as `--role pub|sub`, possibly inside a namespace) --------------------
 
+
 def stamp(ns: int) -> dict:
     return {"sec": ns // 1_000_000_000, "nanosec": ns % 1_000_000_000}
 
 
 def scan_message(data: bytes, now_ns: int) -> dict:
-    fields = [{"name": n, "offset": 4 * i, "datatype": 7, "count": 1}
-              for i, n in enumerate(["x", "y", "z", "intensity"])]
-    return {"header": {"stamp": stamp(now_ns), "frame_id": "lidar"}, "height": 1,
-            "width": SCAN_POINTS, "fields": fields, "is_bigendian": False,
-            "point_step": POINT_STEP, "row_step": POINT_STEP * SCAN_POINTS, "data": data,
-            "is_dense": True}
+    fields = [
+        {"name": n, "offset": 4 * i, "datatype": 7, "count": 1}
+        for i, n in enumerate(["x", "y", "z", "intensity"])
+    ]
+    return {
+        "header": {"stamp": stamp(now_ns), "frame_id": "lidar"},
+        "height": 1,
+        "width": SCAN_POINTS,
+        "fields": fields,
+        "is_bigendian": False,
+        "point_step": POINT_STEP,
+        "row_step": POINT_STEP * SCAN_POINTS,
+        "data": data,
+        "is_dense": True,
+    }
 
 
 def imu_message(now_ns: int) -> dict:
-    return {"header": {"stamp": stamp(now_ns), "frame_id": "imu"},
-            "linear_acceleration": {"x": 0.0, "y": 0.0, "z": 9.80665}}
+    return {
+        "header": {"stamp": stamp(now_ns), "frame_id": "imu"},
+        "linear_acceleration": {"x": 0.0, "y": 0.0, "z": 9.80665},
+    }
 
 
 async def publish(url: str, seconds: float) -> dict:
@@ -83,8 +98,10 @@ async def publish(url: str, seconds: float) -> dict:
     sent = {"scan": 0, "imu": 0}
     data = np.random.default_rng(0).random(SCAN_POINTS * 4, dtype=np.float32).tobytes()
     async with websockets.connect(url, max_size=None, compression=None) as ws:
-        for topic, type_name in (("/lidar/points", "sensor_msgs/msg/PointCloud2"),
-                                 ("/imu/data", "sensor_msgs/msg/Imu")):
+        for topic, type_name in (
+            ("/lidar/points", "sensor_msgs/msg/PointCloud2"),
+            ("/imu/data", "sensor_msgs/msg/Imu"),
+        ):
             await ws.send(json.dumps({"op": "advertise", "topic": topic, "type": type_name}))
         end = time.monotonic() + seconds
 
@@ -97,9 +114,10 @@ async def publish(url: str, seconds: float) -> dict:
                 next_at += 1.0 / hz
                 await asyncio.sleep(max(0.0, next_at - time.monotonic()))
 
-        await asyncio.gather(stream("/lidar/points", SCAN_HZ, lambda t: scan_message(data, t),
-                                    "scan"),
-                             stream("/imu/data", IMU_HZ, imu_message, "imu"))
+        await asyncio.gather(
+            stream("/lidar/points", SCAN_HZ, lambda t: scan_message(data, t), "scan"),
+            stream("/imu/data", IMU_HZ, imu_message, "imu"),
+        )
     return {"sent": sent}
 
 
@@ -108,17 +126,21 @@ async def subscribe(url: str, seconds: float, warmup_s: float) -> dict:
     ages: dict[str, list[float]] = {"scan": [], "imu": []}
     start_ns = time.time_ns() + int(warmup_s * 1e9)
     async with websockets.connect(url, max_size=None, compression=None) as ws:
-        for topic, type_name in (("/lidar/points", "sensor_msgs/msg/PointCloud2"),
-                                 ("/imu/data", "sensor_msgs/msg/Imu")):
-            await ws.send(json.dumps({"op": "subscribe", "topic": topic, "type": type_name,
-                                      "compression": "cbor"}))
+        for topic, type_name in (
+            ("/lidar/points", "sensor_msgs/msg/PointCloud2"),
+            ("/imu/data", "sensor_msgs/msg/Imu"),
+        ):
+            await ws.send(
+                json.dumps(
+                    {"op": "subscribe", "topic": topic, "type": type_name, "compression": "cbor"}
+                )
+            )
         print("subscribed", flush=True)
         with contextlib.suppress(TimeoutError):
             async with asyncio.timeout(warmup_s + seconds + 5.0):
                 async for frame in ws:
                     now = time.time_ns()
-                    op = codec_cbor.loads(frame) if isinstance(frame, bytes) else json.loads(
-                        frame)
+                    op = codec_cbor.loads(frame) if isinstance(frame, bytes) else json.loads(frame)
                     header = op.get("msg", {}).get("header", {}).get("stamp")
                     if op.get("op") != "publish" or header is None:
                         continue
@@ -131,15 +153,33 @@ async def subscribe(url: str, seconds: float, warmup_s: float) -> dict:
 
 # -- the driver -------------------------------------------------------------------------------
 
+
 def role_argv(role: str, url: str, seconds: float, host: Host | None) -> list[str]:
-    argv = [sys.executable, str(Path(__file__).resolve()), "--role", role, "--url", url,
-            "--seconds", str(seconds)]
+    argv = [
+        sys.executable,
+        str(Path(__file__).resolve()),
+        "--role",
+        role,
+        "--url",
+        url,
+        "--seconds",
+        str(seconds),
+    ]
     return host.command(argv) if host is not None else argv
 
 
 def bridge_argv(host: Host | None, peer: Host | None, domain: int | None) -> list[str]:
-    argv = [sys.executable, "-m", "bridge", "--host", "127.0.0.1", "--port", "0",
-            "--log-level", "warning"]
+    argv = [
+        sys.executable,
+        "-m",
+        "bridge",
+        "--host",
+        "127.0.0.1",
+        "--port",
+        "0",
+        "--log-level",
+        "warning",
+    ]
     if domain is not None:
         argv += ["--dds", "--domain", str(domain), *EXTRA_BRIDGE_ARGS]
     if host is not None and peer is not None:
@@ -148,8 +188,9 @@ def bridge_argv(host: Host | None, peer: Host | None, domain: int | None) -> lis
 
 
 @contextlib.contextmanager
-def bridge(host: Host | None = None, peer: Host | None = None,
-           domain: int | None = None) -> Iterator[str]:
+def bridge(
+    host: Host | None = None, peer: Host | None = None, domain: int | None = None
+) -> Iterator[str]:
     child = Running(bridge_argv(host, peer, domain), env=repo_env(TUNED_MALLOC))
     try:
         port = child.wait_for_line(LISTENING).group("port")
@@ -159,13 +200,19 @@ def bridge(host: Host | None = None, peer: Host | None = None,
         child.kill_session()
 
 
-def run_clients(pub_url: str, sub_url: str, seconds: float, pub_host: Host | None,
-                sub_host: Host | None) -> dict:
+def run_clients(
+    pub_url: str, sub_url: str, seconds: float, pub_host: Host | None, sub_host: Host | None
+) -> dict:
     sub = Running(role_argv("sub", sub_url, seconds, sub_host), env=repo_env())
     try:
         sub.wait_for_line("subscribed")
-        pub = subprocess.run(role_argv("pub", pub_url, WARMUP_S + seconds, pub_host),
-                             env=repo_env(), capture_output=True, text=True, check=True)
+        pub = subprocess.run(
+            role_argv("pub", pub_url, WARMUP_S + seconds, pub_host),
+            env=repo_env(),
+            capture_output=True,
+            text=True,
+            check=True,
+        )
         sub.process.wait(timeout=seconds + WARMUP_S + 30)
     finally:
         sub.kill_session()
@@ -198,9 +245,11 @@ def summary(ages: list[float], expected: int) -> str:
     def pct(p: float) -> float:
         return ordered[min(len(ordered) - 1, int(p * len(ordered)))]
 
-    return (f"median {statistics.median(ordered):7.1f}  p90 {pct(0.9):7.1f}  "
-            f"p99 {pct(0.99):7.1f}  max {ordered[-1]:7.1f} ms  n {len(ordered)} of "
-            f"{expected}")
+    return (
+        f"median {statistics.median(ordered):7.1f}  p90 {pct(0.9):7.1f}  "
+        f"p99 {pct(0.99):7.1f}  max {ordered[-1]:7.1f} ms  n {len(ordered)} of "
+        f"{expected}"
+    )
 
 
 def load() -> str:
@@ -208,9 +257,11 @@ def load() -> str:
 
 
 def drive(cases: list[str], seconds: float, shape: LinkShape) -> None:
-    print(f"{SCAN_POINTS:,}-point scan ({SCAN_POINTS * POINT_STEP:,} B) at {SCAN_HZ:g} Hz + "
-          f"Imu at {IMU_HZ:g} Hz, CBOR; {seconds:g} s per case after {WARMUP_S:g} s warm-up; "
-          f"Cyclone {'untuned' if EXTRA_BRIDGE_ARGS else 'tuned'}; {load()}")
+    print(
+        f"{SCAN_POINTS:,}-point scan ({SCAN_POINTS * POINT_STEP:,} B) at {SCAN_HZ:g} Hz + "
+        f"Imu at {IMU_HZ:g} Hz, CBOR; {seconds:g} s per case after {WARMUP_S:g} s warm-up; "
+        f"Cyclone {'untuned' if EXTRA_BRIDGE_ARGS else 'tuned'}; {load()}"
+    )
     medians: dict[str, float] = {}
     for case in cases:
         reason = why_not() if case in ("dds-veth", "dds-wlan") else None
@@ -226,9 +277,14 @@ def drive(cases: list[str], seconds: float, shape: LinkShape) -> None:
             medians[case] = statistics.median(ages["scan"])
     if "one-bridge" in medians:
         base = medians["one-bridge"]
-        print("scan median vs one bridge: " + ", ".join(
-            f"{case} x{median / base:.2f}" for case, median in medians.items()
-            if case != "one-bridge"))
+        print(
+            "scan median vs one bridge: "
+            + ", ".join(
+                f"{case} x{median / base:.2f}"
+                for case, median in medians.items()
+                if case != "one-bridge"
+            )
+        )
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -238,10 +294,14 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--wlan-rate-mbit", type=float, default=WLAN.rate_mbit)
     parser.add_argument("--wlan-delay-ms", type=float, default=WLAN.delay_ms)
     parser.add_argument("--wlan-jitter-ms", type=float, default=WLAN.jitter_ms)
-    parser.add_argument("--wlan-loss", type=float, default=WLAN.loss_percent,
-                        help="percent of packets lost")
-    parser.add_argument("--untuned", action="store_true",
-                        help="run the DDS bridges with Cyclone's own buffers (--dds-untuned)")
+    parser.add_argument(
+        "--wlan-loss", type=float, default=WLAN.loss_percent, help="percent of packets lost"
+    )
+    parser.add_argument(
+        "--untuned",
+        action="store_true",
+        help="run the DDS bridges with Cyclone's own buffers (--dds-untuned)",
+    )
     parser.add_argument("--role", choices=("pub", "sub"), help=argparse.SUPPRESS)
     parser.add_argument("--url", help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
@@ -257,8 +317,11 @@ def main(argv: list[str] | None = None) -> int:
     unknown = set(cases) - set(CASES)
     if unknown:
         parser.error(f"unknown cases: {', '.join(sorted(unknown))} (choose from {CASES})")
-    drive(cases, args.seconds, LinkShape(args.wlan_rate_mbit, args.wlan_delay_ms,
-                                         args.wlan_jitter_ms, args.wlan_loss))
+    drive(
+        cases,
+        args.seconds,
+        LinkShape(args.wlan_rate_mbit, args.wlan_delay_ms, args.wlan_jitter_ms, args.wlan_loss),
+    )
     return 0
 
 

@@ -33,8 +33,12 @@ from sklearn.cluster import DBSCAN
 from sklearn.metrics import adjusted_rand_score
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path[:0] = [str(ROOT), str(ROOT / "tests"), str(ROOT / "tests" / "navigation"),
-                str(ROOT / "tests" / "simulator")]
+sys.path[:0] = [
+    str(ROOT),
+    str(ROOT / "tests"),
+    str(ROOT / "tests" / "navigation"),
+    str(ROOT / "tests" / "simulator"),
+]
 
 from clients import RosbridgeClient  # noqa: E402
 from navigation.boxes import refine_boxes  # noqa: E402
@@ -348,8 +352,10 @@ def simulator_scans(count: int) -> list[np.ndarray]:
 
     scene = build_scene()
     start = scene.start_pose
-    poses = [Pose2D(start.x_m + 1.0 * k, start.y_m + 4.0 * k, start.yaw_rad + 0.02 * k)
-             for k in range(min(count, 5))]
+    poses = [
+        Pose2D(start.x_m + 1.0 * k, start.y_m + 4.0 * k, start.yaw_rad + 0.02 * k)
+        for k in range(min(count, 5))
+    ]
     lidar = Lidar()
     try:
         return [lidar.scan(scene, pose) for pose in poses]
@@ -388,9 +394,11 @@ async def sustained_run(url: str, scans: list[np.ndarray], count: int) -> Sustai
     processors = TimedProcessors(config)
     latency_ms: list[float] = []
     lidar_topic, lidar_type = SENSOR_INPUTS["lidar"]
-    async with (RosbridgeClient(url, name="navigation") as nav_client,
-                RosbridgeClient(url, name="feeder") as feeder,
-                RosbridgeClient(url, name="listener") as listener):
+    async with (
+        RosbridgeClient(url, name="navigation") as nav_client,
+        RosbridgeClient(url, name="feeder") as feeder,
+        RosbridgeClient(url, name="listener") as listener,
+    ):
         await feeder.advertise(lidar_topic, lidar_type)
         boxes = await listener.subscribe(TOPIC_BOXES, OUTPUT_TYPES[TOPIC_BOXES], maxsize=1000)
 
@@ -405,8 +413,9 @@ async def sustained_run(url: str, scans: list[np.ndarray], count: int) -> Sustai
         loop = asyncio.get_running_loop()
         next_s = loop.time()
         for k in range(count):
-            await feeder.publish(lidar_topic, pack_points(scans[k % len(scans)],
-                                                              time.time_ns(), "lidar"))
+            await feeder.publish(
+                lidar_topic, pack_points(scans[k % len(scans)], time.time_ns(), "lidar")
+            )
             next_s += SCAN_PERIOD_S
             await asyncio.sleep(max(0.0, next_s - loop.time()))
         deadline = loop.time() + DRAIN_S
@@ -418,8 +427,7 @@ async def sustained_run(url: str, scans: list[np.ndarray], count: int) -> Sustai
         await tasks[0]
         tasks[1].cancel()
         await asyncio.gather(tasks[1], return_exceptions=True)
-    return SustainedResult(count, len(latency_ms), skipped, failed, processors.lidar_ms,
-                           latency_ms)
+    return SustainedResult(count, len(latency_ms), skipped, failed, processors.lidar_ms, latency_ms)
 
 
 def distribution(values: list[float]) -> str:
@@ -427,8 +435,10 @@ def distribution(values: list[float]) -> str:
         return "none"
     ordered = sorted(values)
     p90 = ordered[int(0.9 * (len(ordered) - 1))]
-    return (f"min {ordered[0]:7.1f}  median {statistics.median(ordered):7.1f}  "
-            f"p90 {p90:7.1f}  max {ordered[-1]:7.1f} ms")
+    return (
+        f"min {ordered[0]:7.1f}  median {statistics.median(ordered):7.1f}  "
+        f"p90 {p90:7.1f}  max {ordered[-1]:7.1f} ms"
+    )
 
 
 def run_sustained(count: int) -> None:
@@ -436,13 +446,17 @@ def run_sustained(count: int) -> None:
 
     scans = simulator_scans(count)
     points = [len(scan) for scan in scans]
-    print(f"\n## LIDAR sustained: {count} simulator scans at 2 Hz ({len(scans)} poses, "
-          f"{min(points):,}-{max(points):,} points) -> python -m bridge -> NavigationNode")
+    print(
+        f"\n## LIDAR sustained: {count} simulator scans at 2 Hz ({len(scans)} poses, "
+        f"{min(points):,}-{max(points):,} points) -> python -m bridge -> NavigationNode"
+    )
     with running_bridge() as (_, url):
         result = asyncio.run(sustained_run(url, scans, count))
     verdict = "ok" if result.skipped == 0 and result.boxes == result.fed else "SCANS LOST"
-    print(f"fed {result.fed}, processed {len(result.processing_ms)}, skipped {result.skipped}, "
-          f"failed {result.failed}, boxes received {result.boxes} ({verdict})")
+    print(
+        f"fed {result.fed}, processed {len(result.processing_ms)}, skipped {result.skipped}, "
+        f"failed {result.failed}, boxes received {result.boxes} ({verdict})"
+    )
     print(f"processing (worker thread): {distribution(result.processing_ms)}")
     print(f"scan -> boxes (capture stamp to boxes received): {distribution(result.latency_ms)}")
 
@@ -450,10 +464,15 @@ def run_sustained(count: int) -> None:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeat", type=int, default=30, help="timed runs per step")
-    parser.add_argument("--sustained-scans", type=int, default=20,
-                        help="scans of the 2 Hz sustained run (0: skip it)")
-    parser.add_argument("--only-sustained", action="store_true",
-                        help="run only the sustained 2 Hz run")
+    parser.add_argument(
+        "--sustained-scans",
+        type=int,
+        default=20,
+        help="scans of the 2 Hz sustained run (0: skip it)",
+    )
+    parser.add_argument(
+        "--only-sustained", action="store_true", help="run only the sustained 2 Hz run"
+    )
     args = parser.parse_args(argv)
     logging.basicConfig(level=logging.WARNING, format="%(levelname)s %(name)s: %(message)s")
     single_threaded_blas()  # as in the navigation process

@@ -50,12 +50,16 @@ def cpu_seconds(pid: int) -> float:
 
 async def start(*argv: str) -> asyncio.subprocess.Process:
     return await asyncio.create_subprocess_exec(
-        *argv, stdout=asyncio.subprocess.PIPE, stderr=asyncio.subprocess.STDOUT,
-        env={**os.environ, "PYTHONUNBUFFERED": "1"})
+        *argv,
+        stdout=asyncio.subprocess.PIPE,
+        stderr=asyncio.subprocess.STDOUT,
+        env={**os.environ, "PYTHONUNBUFFERED": "1"},
+    )
 
 
-async def wait_line(process: asyncio.subprocess.Process, pattern: str,
-                    timeout_s: float = 300) -> re.Match[bytes]:
+async def wait_line(
+    process: asyncio.subprocess.Process, pattern: str, timeout_s: float = 300
+) -> re.Match[bytes]:
     assert process.stdout is not None
     async with asyncio.timeout(timeout_s):
         while line := await process.stdout.readline():
@@ -78,8 +82,9 @@ async def stop(process: asyncio.subprocess.Process) -> None:
 
 @contextlib.asynccontextmanager
 async def stack() -> AsyncIterator[str]:
-    up = await start(sys.executable, "-m", "clients.stack.up_cli", "--host", "127.0.0.1", "--port",
-                     "0")
+    up = await start(
+        sys.executable, "-m", "clients.stack.up_cli", "--host", "127.0.0.1", "--port", "0"
+    )
     try:
         url = (await wait_line(up, r"connect to (ws://[\d.]+:\d+)"))[1].decode()
         pump = asyncio.create_task(drain(up))
@@ -104,18 +109,26 @@ async def bare_bridge() -> AsyncIterator[str]:
 async def publish_scans(url: str, scan_hz: float, stop_at: asyncio.Event) -> None:
     """Thesis-sized scans at ``scan_hz`` and IMU samples at 100 Hz until ``stop_at``."""
     data = np.random.default_rng(0).random((SCAN_POINTS, 4), dtype=np.float32).tobytes()
-    fields = [{"name": n, "offset": 4 * i, "datatype": 7, "count": 1}
-              for i, n in enumerate(("x", "y", "z", "intensity"))]
-    async with RosbridgeClient(url, name="scans") as scans, \
-            RosbridgeClient(url, name="imu") as imu:
+    fields = [
+        {"name": n, "offset": 4 * i, "datatype": 7, "count": 1}
+        for i, n in enumerate(("x", "y", "z", "intensity"))
+    ]
+    async with RosbridgeClient(url, name="scans") as scans, RosbridgeClient(url, name="imu") as imu:
         await scans.advertise("/lidar/points", "sensor_msgs/msg/PointCloud2", latest_only=True)
         await imu.advertise("/imu/data", "sensor_msgs/msg/Imu")
 
         async def imu_loop() -> None:
             while not stop_at.is_set():
                 now = time.time_ns()
-                await imu.publish("/imu/data", {"header": {"stamp": {
-                    "sec": now // NS_PER_S, "nanosec": now % NS_PER_S}, "frame_id": "imu"}})
+                await imu.publish(
+                    "/imu/data",
+                    {
+                        "header": {
+                            "stamp": {"sec": now // NS_PER_S, "nanosec": now % NS_PER_S},
+                            "frame_id": "imu",
+                        }
+                    },
+                )
                 await asyncio.sleep(0.01)
 
         task = asyncio.create_task(imu_loop())
@@ -123,11 +136,22 @@ async def publish_scans(url: str, scan_hz: float, stop_at: asyncio.Event) -> Non
         next_s = loop.time()
         while not stop_at.is_set():
             now = time.time_ns()
-            await scans.publish("/lidar/points", {
-                "header": {"stamp": {"sec": now // NS_PER_S, "nanosec": now % NS_PER_S},
-                           "frame_id": "lidar"}, "height": 1, "width": SCAN_POINTS,
-                "fields": fields, "point_step": 16, "row_step": 16 * SCAN_POINTS,
-                "data": data, "is_dense": True})
+            await scans.publish(
+                "/lidar/points",
+                {
+                    "header": {
+                        "stamp": {"sec": now // NS_PER_S, "nanosec": now % NS_PER_S},
+                        "frame_id": "lidar",
+                    },
+                    "height": 1,
+                    "width": SCAN_POINTS,
+                    "fields": fields,
+                    "point_step": 16,
+                    "row_step": 16 * SCAN_POINTS,
+                    "data": data,
+                    "is_dense": True,
+                },
+            )
             next_s += 1 / scan_hz
             await asyncio.sleep(max(0.0, next_s - loop.time()))
         task.cancel()
@@ -164,17 +188,24 @@ def file_counts(path: Path, start_ns: int, end_ns: int) -> tuple[Counter[str], i
 
 async def measure(url: str, args: argparse.Namespace, label: str) -> None:
     output = Path(tempfile.mkdtemp()) / "bench.mcap"
-    recorder = await start(sys.executable, "-m", "clients.recording.record_cli", "--bridge",
-                           url, "--output", str(output), "--compression", args.compression)
+    recorder = await start(
+        sys.executable,
+        "-m",
+        "clients.recording.record_cli",
+        "--bridge",
+        url,
+        "--output",
+        str(output),
+        "--compression",
+        args.compression,
+    )
     await wait_line(recorder, r"recording /rosout")
     pump = asyncio.create_task(drain(recorder))
     await asyncio.sleep(args.warmup)
     with burning(args.burn):
-        first, start_ns, cpu0 = await bridge_stats(url), time.time_ns(), cpu_seconds(
-            recorder.pid)
+        first, start_ns, cpu0 = await bridge_stats(url), time.time_ns(), cpu_seconds(recorder.pid)
         await asyncio.sleep(args.window)
-        last, end_ns, cpu1 = await bridge_stats(url), time.time_ns(), cpu_seconds(
-            recorder.pid)
+        last, end_ns, cpu1 = await bridge_stats(url), time.time_ns(), cpu_seconds(recorder.pid)
         load = os.getloadavg()
     await asyncio.sleep(3.0)  # what is still on its way to the recorder
     dropped = bridge_drops(await bridge_stats(url)) - bridge_drops(first)
@@ -183,20 +214,25 @@ async def measure(url: str, args: argparse.Namespace, label: str) -> None:
     before, after = counts_in(first), counts_in(last)
     recorded, size = file_counts(output, start_ns, end_ns)
     window_s = (end_ns - start_ns) / NS_PER_S
-    print(f"\n== {label}: {window_s:.1f} s window, load {load[0]:.2f} (1 min), "
-          f"{args.burn} busy processes, {args.compression}")
-    print(f"   {'topic':<30}{'bridge in':>10}{'recorded':>10}{'ratio':>8}"
-          f"{'bridge dropped (any subscriber)':>33}")
+    print(
+        f"\n== {label}: {window_s:.1f} s window, load {load[0]:.2f} (1 min), "
+        f"{args.burn} busy processes, {args.compression}"
+    )
+    print(
+        f"   {'topic':<30}{'bridge in':>10}{'recorded':>10}{'ratio':>8}"
+        f"{'bridge dropped (any subscriber)':>33}"
+    )
     for topic in sorted(set(after) | set(recorded)):
         got = after[topic] - before[topic]
         if got or recorded[topic]:
             ratio = recorded[topic] / got if got else float("nan")
-            print(f"   {topic:<30}{got:>10}{recorded[topic]:>10}{ratio:>8.3f}"
-                  f"{dropped[topic]:>33}")
+            print(f"   {topic:<30}{got:>10}{recorded[topic]:>10}{ratio:>8.3f}{dropped[topic]:>33}")
     total = sum(recorded.values())
-    print(f"   recorder: {total / window_s:.0f} msg/s, {size / window_s / 1e6:.1f} MB/s CDR, "
-          f"CPU {100 * (cpu1 - cpu0) / window_s:.0f} % of a core; file "
-          f"{output.stat().st_size / 1e6:.1f} MB for the whole run")
+    print(
+        f"   recorder: {total / window_s:.0f} msg/s, {size / window_s / 1e6:.1f} MB/s CDR, "
+        f"CPU {100 * (cpu1 - cpu0) / window_s:.0f} % of a core; file "
+        f"{output.stat().st_size / 1e6:.1f} MB for the whole run"
+    )
     output.unlink()
 
 
@@ -228,8 +264,9 @@ async def main(args: argparse.Namespace) -> None:
                 stop_at = asyncio.Event()
                 publisher = asyncio.create_task(publish_scans(url, scan_hz, stop_at))
                 try:
-                    await measure(url, args, f"scans: 5.5 MB PointCloud2 at {scan_hz:g} Hz + "
-                                  "IMU 100 Hz")
+                    await measure(
+                        url, args, f"scans: 5.5 MB PointCloud2 at {scan_hz:g} Hz + IMU 100 Hz"
+                    )
                 finally:
                     stop_at.set()
                     await publisher

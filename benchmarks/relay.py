@@ -63,8 +63,11 @@ from typing import Any
 
 import numpy as np
 
-TUNED_MALLOC = {"MALLOC_MMAP_THRESHOLD_": "268435456", "MALLOC_TRIM_THRESHOLD_": "1073741824",
-                "MALLOC_TOP_PAD_": "67108864"}
+TUNED_MALLOC = {
+    "MALLOC_MMAP_THRESHOLD_": "268435456",
+    "MALLOC_TRIM_THRESHOLD_": "1073741824",
+    "MALLOC_TOP_PAD_": "67108864",
+}
 SCAN_POINTS = 345_600  # the thesis' LIDAR (Table 4.3): x, y, z, intensity float32 -> 5.5 MB
 # Frames from this size on are encoded/decoded on the client's thread, as riverbridge's own
 # client library does (clients.client.OFFLOAD_BYTES): a JSON scan would hold the loop for ~5 ms,
@@ -80,7 +83,8 @@ REFERENCE = {
     "sustained": "3,300-3,600 msg/s",
     "scan-cbor": "does not accept CBOR publishes",
     "scan-json": "scan p50 1,595 ms, IMU p99 546 ms",
-    "scan2-cbor": "-", "scan2-json": "-",
+    "scan2-cbor": "-",
+    "scan2-json": "-",
 }
 TARGET = {
     "burst": "all 15,000 delivered",
@@ -94,6 +98,7 @@ TARGET = {
 
 # -- messages ----------------------------------------------------------------------------------
 
+
 def stamp(ns: int) -> dict[str, int]:
     return {"sec": ns // 1_000_000_000, "nanosec": ns % 1_000_000_000}
 
@@ -104,18 +109,30 @@ def string_msg(seq: int) -> dict[str, str]:
 
 
 def imu_msg() -> dict[str, Any]:
-    return {"header": {"stamp": stamp(time.time_ns()), "frame_id": "imu"},
-            "orientation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0},
-            "angular_velocity": {"x": 0.01, "y": 0.02, "z": 0.03},
-            "linear_acceleration": {"x": 0.1, "y": 0.2, "z": 9.81}}
+    return {
+        "header": {"stamp": stamp(time.time_ns()), "frame_id": "imu"},
+        "orientation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0},
+        "angular_velocity": {"x": 0.01, "y": 0.02, "z": 0.03},
+        "linear_acceleration": {"x": 0.1, "y": 0.2, "z": 9.81},
+    }
 
 
 def scan_msg(data: bytes) -> dict[str, Any]:
-    fields = [{"name": n, "offset": 4 * i, "datatype": 7, "count": 1}
-              for i, n in enumerate(["x", "y", "z", "intensity"])]
-    return {"header": {"stamp": stamp(time.time_ns()), "frame_id": "lidar"}, "height": 1,
-            "width": SCAN_POINTS, "fields": fields, "is_bigendian": False, "point_step": 16,
-            "row_step": 16 * SCAN_POINTS, "data": data, "is_dense": True}
+    fields = [
+        {"name": n, "offset": 4 * i, "datatype": 7, "count": 1}
+        for i, n in enumerate(["x", "y", "z", "intensity"])
+    ]
+    return {
+        "header": {"stamp": stamp(time.time_ns()), "frame_id": "lidar"},
+        "height": 1,
+        "width": SCAN_POINTS,
+        "fields": fields,
+        "is_bigendian": False,
+        "point_step": 16,
+        "row_step": 16 * SCAN_POINTS,
+        "data": data,
+        "is_dense": True,
+    }
 
 
 def sent_ns(topic: str, msg: dict[str, Any]) -> tuple[int, int]:
@@ -128,6 +145,7 @@ def sent_ns(topic: str, msg: dict[str, Any]) -> tuple[int, int]:
 
 
 # -- a careful raw client ------------------------------------------------------------------------
+
 
 class RawClient:
     """One websocket; big frames encoded and decoded on one thread each, order kept."""
@@ -142,8 +160,8 @@ class RawClient:
 
     async def __aenter__(self) -> RawClient:
         import websockets
-        self.ws = await websockets.connect(self.url, max_size=None, compression=None,
-                                           max_queue=64)
+
+        self.ws = await websockets.connect(self.url, max_size=None, compression=None, max_queue=64)
         return self
 
     async def __aexit__(self, *exc: object) -> None:
@@ -155,14 +173,16 @@ class RawClient:
 
     def _encode(self, op: dict[str, Any]) -> bytes | str:
         from schemas import codec_cbor, codec_json
+
         if self.binary and op["op"] == "publish":
             return codec_cbor.dumps(op)
         return codec_json.dumps(op).decode("ascii")
 
     async def send(self, op: dict[str, Any], big: bool = False) -> None:
         if big and not self.binary:
-            frame = await asyncio.get_running_loop().run_in_executor(self._encoder,
-                                                                     self._encode, op)
+            frame = await asyncio.get_running_loop().run_in_executor(
+                self._encoder, self._encode, op
+            )
         else:
             frame = self._encode(op)
         await self.ws.send(frame)
@@ -199,6 +219,7 @@ class RawClient:
 
 
 # -- the two roles ---------------------------------------------------------------------------------
+
 
 @dataclass
 class Received:
@@ -237,8 +258,14 @@ async def subscriber(pipe: Connection, url: str, binary: bool, workload: str) ->
             sub = await stack.enter_async_context(RawClient(url, binary))
             sub.read(handle)
             for topic, type_name in group:
-                await sub.send({"op": "subscribe", "topic": topic, "type": type_name,
-                                "compression": compression})
+                await sub.send(
+                    {
+                        "op": "subscribe",
+                        "topic": topic,
+                        "type": type_name,
+                        "compression": compression,
+                    }
+                )
             await sub.call("/rosapi/get_time")
             await subscribed.acquire()
         started_cpu_s = cpu_s()
@@ -299,8 +326,9 @@ async def publish_scan_imu(pub: Any, imu_pub: Any, seconds: float) -> dict[str, 
     return sent
 
 
-async def publisher(pipe: Connection, url: str, binary: bool, workload: str, count: int,
-                    seconds: float) -> None:
+async def publisher(
+    pipe: Connection, url: str, binary: bool, workload: str, count: int, seconds: float
+) -> None:
     async with contextlib.AsyncExitStack() as stack:
         pubs = []
         for group in connection_groups(workload):
@@ -345,6 +373,7 @@ def cpu_s(pid: int | None = None) -> float:
 def run_role(role: str, pipe: Connection, *args: Any) -> None:
     """Entry point of a spawned process: tuned like every riverbridge process."""
     from schemas.runtime.process import freeze_startup_heap, tune_process
+
     tune_process()
     freeze_startup_heap()
     asyncio.run((subscriber if role == "sub" else publisher)(pipe, *args))
@@ -352,12 +381,14 @@ def run_role(role: str, pipe: Connection, *args: Any) -> None:
 
 # -- orchestration -----------------------------------------------------------------------------
 
+
 def percentile(values: list[float], q: float) -> float:
     return float(np.percentile(values, q)) if values else float("nan")
 
 
-def one_run(url: str, workload: str, encoding: str, args: argparse.Namespace,
-            bridge_pid: int | None) -> dict[str, Any]:
+def one_run(
+    url: str, workload: str, encoding: str, args: argparse.Namespace, bridge_pid: int | None
+) -> dict[str, Any]:
     ctx = mp.get_context("spawn")
     binary = encoding == "cbor"
     sub_end, sub_pipe = ctx.Pipe()
@@ -367,8 +398,9 @@ def one_run(url: str, workload: str, encoding: str, args: argparse.Namespace,
     if not sub_end.poll(30) or sub_end.recv() != "ready":
         raise RuntimeError("subscriber did not start")
     bridge_cpu = cpu_s(bridge_pid) if bridge_pid else float("nan")
-    pub = ctx.Process(target=run_role, args=("pub", pub_pipe, url, binary, workload,
-                                             args.count, args.seconds))
+    pub = ctx.Process(
+        target=run_role, args=("pub", pub_pipe, url, binary, workload, args.count, args.seconds)
+    )
     pub.start()
     sent, elapsed, pub_cpu = pub_end.recv()
     sub_end.send(sent)
@@ -376,8 +408,12 @@ def one_run(url: str, workload: str, encoding: str, args: argparse.Namespace,
     bridge_cpu = (cpu_s(bridge_pid) if bridge_pid else float("nan")) - bridge_cpu
     pub.join(10)
     sub.join(10)
-    return {"sent": sent, "elapsed_s": elapsed, "seen": seen,
-            "cpu_s": {"bridge": bridge_cpu, "publisher": pub_cpu, "subscriber": sub_cpu}}
+    return {
+        "sent": sent,
+        "elapsed_s": elapsed,
+        "seen": seen,
+        "cpu_s": {"bridge": bridge_cpu, "publisher": pub_cpu, "subscriber": sub_cpu},
+    }
 
 
 def summarize(workload: str, encoding: str, result: dict[str, Any]) -> list[str]:
@@ -387,7 +423,7 @@ def summarize(workload: str, encoding: str, result: dict[str, Any]) -> list[str]
         got = seen[topic]
         ages = got["ages_ms"]
         if workload.startswith("scan"):
-            ages = ages[int(WARMUP_S * (2 if topic == "/lidar" else 50)):]
+            ages = ages[int(WARMUP_S * (2 if topic == "/lidar" else 50)) :]
         span_s = max(1e-9, (got["last_ns"] - got["first_ns"]) / 1e9)
         loss = n_sent - got["count"]
         lines.append(
@@ -395,10 +431,14 @@ def summarize(workload: str, encoding: str, result: dict[str, Any]) -> list[str]
             f"{got['count']:>7,} ({got['count'] / span_s:>8,.0f}/s)  loss {loss:>6,} "
             f"({100 * loss / max(1, n_sent):4.1f} %)  out of order {got['out_of_order']}  "
             f"age p50 {percentile(ages, 50):7.1f}  p99 {percentile(ages, 99):7.1f}  "
-            f"max {max(ages, default=float('nan')):7.1f} ms")
+            f"max {max(ages, default=float('nan')):7.1f} ms"
+        )
     cpu = result["cpu_s"]
-    lines.append("  CPU s: " + ", ".join(f"{name} {seconds:.2f}" for name, seconds in cpu.items())
-                 + " (from connected to done)")
+    lines.append(
+        "  CPU s: "
+        + ", ".join(f"{name} {seconds:.2f}" for name, seconds in cpu.items())
+        + " (from connected to done)"
+    )
     key = workload if not workload.startswith("scan") else f"{workload}-{encoding}"
     lines.append(f"  reference rosbridge: {REFERENCE[key]}; target: {TARGET[key]}")
     return lines
@@ -409,9 +449,13 @@ def start_bridge(extra: list[str], root: str | None) -> tuple[subprocess.Popen[s
     if root is not None:  # another checkout's bridge (e.g. main, for a before/after)
         root = os.path.abspath(root)
         env["PYTHONPATH"] = root
-    process = subprocess.Popen([sys.executable, "-m", "bridge", "--port", "0",
-                                "--log-level", "warning", *extra], stderr=subprocess.PIPE,
-                               env=env, text=True, cwd=root)
+    process = subprocess.Popen(
+        [sys.executable, "-m", "bridge", "--port", "0", "--log-level", "warning", *extra],
+        stderr=subprocess.PIPE,
+        env=env,
+        text=True,
+        cwd=root,
+    )
     assert process.stderr is not None
     for line in process.stderr:
         match = re.search(r"listening on (ws://\S+)", line)
@@ -427,6 +471,7 @@ async def floor_relay(pipe: Connection) -> None:
     import orjson
     from websockets.asyncio.server import serve
     from websockets.exceptions import ConnectionClosed
+
     subscribers: dict[str, set[Any]] = {}
 
     async def relay(ws: Any) -> None:
@@ -440,14 +485,23 @@ async def floor_relay(pipe: Connection) -> None:
                 subscribers.setdefault(op["topic"], set()).add(ws)
             elif op["op"] == "call_service":
                 with contextlib.suppress(ConnectionClosed):
-                    await ws.send(orjson.dumps({"op": "service_response", "id": op.get("id"),
-                                                "service": op["service"], "values": {},
-                                                "result": True}).decode())
+                    await ws.send(
+                        orjson.dumps(
+                            {
+                                "op": "service_response",
+                                "id": op.get("id"),
+                                "service": op["service"],
+                                "values": {},
+                                "result": True,
+                            }
+                        ).decode()
+                    )
         for subs in subscribers.values():
             subs.discard(ws)
 
-    async with serve(relay, "127.0.0.1", 0, compression=None, max_size=None,
-                     write_limit=1024 * 1024) as server:
+    async with serve(
+        relay, "127.0.0.1", 0, compression=None, max_size=None, write_limit=1024 * 1024
+    ) as server:
         pipe.send(server.sockets[0].getsockname()[1])
         await asyncio.Future()
 
@@ -475,15 +529,17 @@ def start_targets(args: argparse.Namespace) -> list[Target]:
         targets.append(Target("this", url, process.pid, process.terminate))
     if args.compare:
         process, url = start_bridge(args.bridge_args, args.compare)
-        targets.append(Target(os.path.basename(os.path.abspath(args.compare)), url,
-                              process.pid, process.terminate))
+        targets.append(
+            Target(
+                os.path.basename(os.path.abspath(args.compare)), url, process.pid, process.terminate
+            )
+        )
     if args.floor:
         ctx = mp.get_context("spawn")
         end, pipe = ctx.Pipe()
         floor = ctx.Process(target=run_floor, args=(pipe,), daemon=True)
         floor.start()
-        targets.append(Target("floor", f"ws://127.0.0.1:{end.recv()}", floor.pid,
-                              floor.terminate))
+        targets.append(Target("floor", f"ws://127.0.0.1:{end.recv()}", floor.pid, floor.terminate))
     return targets
 
 
@@ -494,7 +550,7 @@ def metrics(workload: str, result: dict[str, Any]) -> dict[str, float]:
         got = result["seen"][topic]
         ages = got["ages_ms"]
         if workload.startswith("scan"):
-            ages = ages[int(WARMUP_S * (2 if topic == "/lidar" else 50)):]
+            ages = ages[int(WARMUP_S * (2 if topic == "/lidar" else 50)) :]
         span_s = max(1e-9, (got["last_ns"] - got["first_ns"]) / 1e9)
         out[f"{topic} delivered/s"] = got["count"] / span_s
         out[f"{topic} loss %"] = 100 * (n_sent - got["count"]) / max(1, n_sent)
@@ -508,44 +564,68 @@ def metrics(workload: str, result: dict[str, Any]) -> dict[str, float]:
 def median_table(targets: list[Target], runs: dict[str, list[dict[str, float]]]) -> list[str]:
     """Medians per target, and each target's ratio to the first."""
     labels = [t.label for t in targets]
-    head = f"  {'median of ' + str(len(runs[labels[0]])) + ' runs':<28}" + "".join(
-        f"{label:>12}" for label in labels) + "".join(
-        f"{label + '/' + labels[0]:>14}" for label in labels[1:])
+    head = (
+        f"  {'median of ' + str(len(runs[labels[0]])) + ' runs':<28}"
+        + "".join(f"{label:>12}" for label in labels)
+        + "".join(f"{label + '/' + labels[0]:>14}" for label in labels[1:])
+    )
     lines = [head]
     for key in runs[labels[0]][0]:
         medians = [float(np.median([run[key] for run in runs[label]])) for label in labels]
         ratios = [m / medians[0] if medians[0] else float("nan") for m in medians[1:]]
-        lines.append(f"  {key:<28}" + "".join(f"{m:>12,.1f}" for m in medians)
-                     + "".join(f"{r:>14.2f}" for r in ratios))
+        lines.append(
+            f"  {key:<28}"
+            + "".join(f"{m:>12,.1f}" for m in medians)
+            + "".join(f"{r:>14.2f}" for r in ratios)
+        )
     return lines
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--only", default="burst,sustained,scan",
-                        help="comma-separated workloads (default %(default)s)")
+    parser.add_argument(
+        "--only",
+        default="burst,sustained,scan",
+        help="comma-separated workloads (default %(default)s)",
+    )
     parser.add_argument("--encodings", default="json,cbor", help="default %(default)s")
     parser.add_argument("--count", type=int, default=15_000, help="burst size")
-    parser.add_argument("--seconds", type=float, default=8.0,
-                        help="duration of the sustained and scan workloads")
-    parser.add_argument("--repeat", type=int, default=1,
-                        help="runs per workload and relay; with more than one, print medians")
-    parser.add_argument("--interleave", action="store_true",
-                        help="with --repeat: run every workload once per round (for comparing "
-                             "workloads, e.g. scan against scan2, under the same load)")
+    parser.add_argument(
+        "--seconds", type=float, default=8.0, help="duration of the sustained and scan workloads"
+    )
+    parser.add_argument(
+        "--repeat",
+        type=int,
+        default=1,
+        help="runs per workload and relay; with more than one, print medians",
+    )
+    parser.add_argument(
+        "--interleave",
+        action="store_true",
+        help="with --repeat: run every workload once per round (for comparing "
+        "workloads, e.g. scan against scan2, under the same load)",
+    )
     parser.add_argument("--url", help="use a running bridge instead of starting one")
-    parser.add_argument("--compare", metavar="DIR",
-                        help="also run the bridge of another checkout (e.g. /work/main), "
-                             "interleaved, and print ratios")
-    parser.add_argument("--floor", action="store_true",
-                        help="also run a bare websockets relay (no validation), the floor")
+    parser.add_argument(
+        "--compare",
+        metavar="DIR",
+        help="also run the bridge of another checkout (e.g. /work/main), "
+        "interleaved, and print ratios",
+    )
+    parser.add_argument(
+        "--floor",
+        action="store_true",
+        help="also run a bare websockets relay (no validation), the floor",
+    )
     parser.add_argument("bridge_args", nargs="*", help="options for `python -m bridge`")
     args = parser.parse_args(argv)
     os.environ.update(TUNED_MALLOC)  # the client processes move megabytes too
     targets = start_targets(args)
     try:
-        print(f"relays: {', '.join(f'{t.label} {t.url}' for t in targets)} "
-              f"{' '.join(args.bridge_args)}; load average {os.getloadavg()[0]:.2f} (1 min)")
+        print(
+            f"relays: {', '.join(f'{t.label} {t.url}' for t in targets)} "
+            f"{' '.join(args.bridge_args)}; load average {os.getloadavg()[0]:.2f} (1 min)"
+        )
         cases = [(w, e) for w in args.only.split(",") for e in args.encodings.split(",")]
         if args.interleave:  # every case once per round, so a change of load hits them all
             runs = {case: new_runs(targets) for case in cases}
@@ -573,8 +653,9 @@ def new_runs(targets: list[Target]) -> Runs:
     return {"loads": [], **{t.label: [] for t in targets}}
 
 
-def run_case(targets: list[Target], workload: str, encoding: str, args: argparse.Namespace,
-             runs: Runs) -> None:
+def run_case(
+    targets: list[Target], workload: str, encoding: str, args: argparse.Namespace, runs: Runs
+) -> None:
     """One run of the case on every target (in turn), appended to `runs`."""
     for target in targets:
         result = one_run(target.url, workload, encoding, args, target.pid)
@@ -590,10 +671,11 @@ def print_case(targets: list[Target], workload: str, encoding: str, runs: Runs) 
         print("\n".join(summarize(workload, encoding, runs["last"])), flush=True)
         return
     key = workload if not workload.startswith("scan") else f"{workload}-{encoding}"
-    print(f"{workload} {encoding}  (load {min(loads):.2f}-{max(loads):.2f}); reference "
-          f"rosbridge: {REFERENCE[key]}; target: {TARGET[key]}")
-    print("\n".join(median_table(targets, {t.label: runs[t.label] for t in targets})),
-          flush=True)
+    print(
+        f"{workload} {encoding}  (load {min(loads):.2f}-{max(loads):.2f}); reference "
+        f"rosbridge: {REFERENCE[key]}; target: {TARGET[key]}"
+    )
+    print("\n".join(median_table(targets, {t.label: runs[t.label] for t in targets})), flush=True)
 
 
 if __name__ == "__main__":

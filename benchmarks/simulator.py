@@ -85,16 +85,19 @@ def reference_query(scene: Scene, lidar: Lidar, pool: ThreadPoolExecutor) -> Cal
     halves = [slice(0, half), slice(half, len(directions))]
 
     def query() -> None:
-        futures = [pool.submit(scene.embree.run, origins[h], directions[h], query="DISTANCE")
-                   for h in halves]
+        futures = [
+            pool.submit(scene.embree.run, origins[h], directions[h], query="DISTANCE")
+            for h in halves
+        ]
         for future in futures:
             future.result()
 
     return query
 
 
-def paired_times_ms(work: Callable[[int], object], reference: Callable[[], object],
-                    repeat: int, warmup: int = 3) -> tuple[list[float], list[float]]:
+def paired_times_ms(
+    work: Callable[[int], object], reference: Callable[[], object], repeat: int, warmup: int = 3
+) -> tuple[list[float], list[float]]:
     """Wall times (ms) of `work(i)` and of `reference()` run just before it, `repeat` times."""
     for i in range(warmup):
         work(i)
@@ -111,8 +114,10 @@ def paired_times_ms(work: Callable[[int], object], reference: Callable[[], objec
 
 def poses_along_the_river(start: Pose2D, count: int) -> list[Pose2D]:
     """Poses a few metres apart with slightly varying heading, so no scan repeats exactly."""
-    return [Pose2D(start.x_m + 0.5 * k, start.y_m + 2.0 * k, start.yaw_rad + 0.01 * k)
-            for k in range(count)]
+    return [
+        Pose2D(start.x_m + 0.5 * k, start.y_m + 2.0 * k, start.yaw_rad + 0.01 * k)
+        for k in range(count)
+    ]
 
 
 def report(name: str, times: tuple[list[float], list[float]], extra: str = "") -> None:
@@ -122,9 +127,11 @@ def report(name: str, times: tuple[list[float], list[float]], extra: str = "") -
     load = statistics.median(times[1]) / QUIET_REFERENCE_MS
     target = TARGETS_MS[name]
     verdict = "ok" if median <= target else "OVER"
-    print(f"{name:<13} min {wall[0]:7.2f}  median {median:7.2f}  p90 {p90:7.2f} ms | "
-          f"target {target:5.1f} ratio {median / target:5.2f} {verdict:<4} | "
-          f"load {load:4.2f} quiet est. {median / load:6.2f} ms | {extra}")
+    print(
+        f"{name:<13} min {wall[0]:7.2f}  median {median:7.2f}  p90 {p90:7.2f} ms | "
+        f"target {target:5.1f} ratio {median / target:5.2f} {verdict:<4} | "
+        f"load {load:4.2f} quiet est. {median / load:6.2f} ms | {extra}"
+    )
 
 
 class SteppingNode(SimulatorNode):
@@ -151,9 +158,12 @@ class NodeSnapshot:
 
     @classmethod
     def of(cls, node: SteppingNode) -> NodeSnapshot:
-        return cls(time.perf_counter(), node.steps,
-                   {name: node.timings[name].count for name in HEAVY_SENSORS},
-                   {name: node.timings[name].skipped for name in HEAVY_SENSORS})
+        return cls(
+            time.perf_counter(),
+            node.steps,
+            {name: node.timings[name].count for name in HEAVY_SENSORS},
+            {name: node.timings[name].skipped for name in HEAVY_SENSORS},
+        )
 
 
 def configured_rates_hz(cfg: SimConfig) -> dict[str, float]:
@@ -169,16 +179,21 @@ def stamp_rate_hz(stamps_s: list[float]) -> float:
     return (len(stamps_s) - 1) / (stamps_s[-1] - stamps_s[0])
 
 
-async def realtime_run(url: str, cfg: SimConfig, scene: Scene, seconds: float
-                       ) -> tuple[NodeSnapshot, NodeSnapshot, dict[str, list[float]], SteppingNode]:
+async def realtime_run(
+    url: str, cfg: SimConfig, scene: Scene, seconds: float
+) -> tuple[NodeSnapshot, NodeSnapshot, dict[str, list[float]], SteppingNode]:
     """Run the node against `url` for warm-up + `seconds`; counters at both ends of the
     measured window and the capture stamps (s) a listener received within it."""
     stamps: dict[str, list[float]] = {name: [] for name in TOPICS}
     recording = asyncio.Event()
-    async with (RosbridgeClient(url, name="simulator") as client,
-                RosbridgeClient(url, name="listener") as listener):
-        subs = {name: await listener.subscribe(topic, type_name, maxsize=10_000)
-                for name, (topic, type_name) in TOPICS.items()}
+    async with (
+        RosbridgeClient(url, name="simulator") as client,
+        RosbridgeClient(url, name="listener") as listener,
+    ):
+        subs = {
+            name: await listener.subscribe(topic, type_name, maxsize=10_000)
+            for name, (topic, type_name) in TOPICS.items()
+        }
 
         async def consume(name: str) -> None:
             async for received in subs[name]:
@@ -203,17 +218,26 @@ async def realtime_run(url: str, cfg: SimConfig, scene: Scene, seconds: float
     return first, last, stamps, node
 
 
-def report_realtime(cfg: SimConfig, first: NodeSnapshot, last: NodeSnapshot,
-                    stamps: dict[str, list[float]], node: SteppingNode) -> None:
+def report_realtime(
+    cfg: SimConfig,
+    first: NodeSnapshot,
+    last: NodeSnapshot,
+    stamps: dict[str, list[float]],
+    node: SteppingNode,
+) -> None:
     wall_s = last.wall_s - first.wall_s
     simulated_s = (last.steps - first.steps) / cfg.vessel.physics_rate_hz
     rtf = simulated_s / wall_s
     verdict = "ok" if abs(rtf - 1.0) <= RTF_TOLERANCE else "OUT OF TOLERANCE"
-    print(f"\nreal-time factor: simulated {simulated_s:.2f} s / wall {wall_s:.2f} s = "
-          f"{rtf:.4f} (target 1.00 +- {RTF_TOLERANCE}: {verdict}); physics lateness "
-          f"{node.physics_lateness.summary()} (last 200 ticks)")
-    print(f"{'topic':<7} {'configured':>10} {'generated':>10} {'received':>9} {'msgs':>5} "
-          f"{'skipped':>7}  generation (last 200)")
+    print(
+        f"\nreal-time factor: simulated {simulated_s:.2f} s / wall {wall_s:.2f} s = "
+        f"{rtf:.4f} (target 1.00 +- {RTF_TOLERANCE}: {verdict}); physics lateness "
+        f"{node.physics_lateness.summary()} (last 200 ticks)"
+    )
+    print(
+        f"{'topic':<7} {'configured':>10} {'generated':>10} {'received':>9} {'msgs':>5} "
+        f"{'skipped':>7}  generation (last 200)"
+    )
     for name, hz in configured_rates_hz(cfg).items():
         if name in HEAVY_SENSORS:
             generated = f"{(last.generated[name] - first.generated[name]) / wall_s:10.3f}"
@@ -222,17 +246,23 @@ def report_realtime(cfg: SimConfig, first: NodeSnapshot, last: NodeSnapshot,
         else:
             generated, skipped, timing = f"{'-':>10}", f"{'-':>7}", ""
         received = stamp_rate_hz(stamps[name])
-        print(f"{name:<7} {hz:10.3f} {generated} {received:9.3f} {len(stamps[name]):5d} "
-              f"{skipped}  {timing}")
-    print("generated = sensor messages made per wall second; received = rate of capture "
-          "stamps a listener got through the bridge; skipped = sensor ticks missed by overrun")
+        print(
+            f"{name:<7} {hz:10.3f} {generated} {received:9.3f} {len(stamps[name]):5d} "
+            f"{skipped}  {timing}"
+        )
+    print(
+        "generated = sensor messages made per wall second; received = rate of capture "
+        "stamps a listener got through the bridge; skipped = sensor ticks missed by overrun"
+    )
 
 
 def run_realtime(seconds: float, cfg: SimConfig, scene: Scene) -> None:
     """The whole simulator in real time against `python -m bridge`, every sensor on."""
-    print(f"\n## whole simulator, {seconds:g} s after {RTF_WARMUP_S:g} s warm-up, default "
-          f"config (every sensor at its rate), against `python -m bridge`; load average "
-          f"{os.getloadavg()[0]:.2f}")
+    print(
+        f"\n## whole simulator, {seconds:g} s after {RTF_WARMUP_S:g} s warm-up, default "
+        f"config (every sensor at its rate), against `python -m bridge`; load average "
+        f"{os.getloadavg()[0]:.2f}"
+    )
     with running_bridge() as (_, url):
         first, last, stamps, node = asyncio.run(realtime_run(url, cfg, scene, seconds))
     report_realtime(cfg, first, last, stamps, node)
@@ -252,8 +282,11 @@ def core_benchmarks(args: argparse.Namespace, scene: Scene) -> None:
             lidar.message(points, stamp_ns=i)
             points_seen.append(len(points))
 
-        report("lidar scan", paired_times_ms(lidar_scan, reference, args.repeat),
-               f"{lidar.ray_count:,} rays, median {statistics.median(points_seen):,.0f} points")
+        report(
+            "lidar scan",
+            paired_times_ms(lidar_scan, reference, args.repeat),
+            f"{lidar.ray_count:,} rays, median {statistics.median(points_seen):,.0f} points",
+        )
         jpeg_bytes: list[int] = []
 
         def camera_frame(i: int) -> None:
@@ -261,11 +294,20 @@ def core_benchmarks(args: argparse.Namespace, scene: Scene) -> None:
             camera.message(jpeg, stamp_ns=i)
             jpeg_bytes.append(len(jpeg))
 
-        report("camera frame", paired_times_ms(camera_frame, reference, args.repeat),
-               f"640x480, JPEG median {statistics.median(jpeg_bytes) / 1e3:.0f} kB")
-        report("radar sweep", paired_times_ms(
-            lambda i: radar.message(radar.sweep(scene, poses[i]), stamp_ns=i), reference,
-            args.repeat), f"{len(radar.geometry.directions_sensor):,} rays")
+        report(
+            "camera frame",
+            paired_times_ms(camera_frame, reference, args.repeat),
+            f"640x480, JPEG median {statistics.median(jpeg_bytes) / 1e3:.0f} kB",
+        )
+        report(
+            "radar sweep",
+            paired_times_ms(
+                lambda i: radar.message(radar.sweep(scene, poses[i]), stamp_ns=i),
+                reference,
+                args.repeat,
+            ),
+            f"{len(radar.geometry.directions_sensor):,} rays",
+        )
     finally:
         lidar.close()
         camera.close()
@@ -281,8 +323,11 @@ def core_benchmarks(args: argparse.Namespace, scene: Scene) -> None:
             imu.message(imu.measure(result), stamp_ns=50 * i + k)
 
     steps, refs = paired_times_ms(imu_steps, reference, args.repeat)
-    report("imu step", ([t / 50 for t in steps], refs),
-           "physics RK4 + collision rays + IMU reading + message")
+    report(
+        "imu step",
+        ([t / 50 for t in steps], refs),
+        "physics RK4 + collision rays + IMU reading + message",
+    )
     reference_pool.shutdown()
 
 
@@ -290,15 +335,26 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeat", type=int, default=30)
     parser.add_argument("--threads", type=int, default=2, help="ray-casting threads per sensor")
-    parser.add_argument("--tuned-malloc", action="store_true",
-                        help="re-run under the glibc malloc thresholds that avoid page faults")
-    parser.add_argument("--rtf-seconds", type=float, default=30.0,
-                        help="length of the real-time run with every sensor on (0: skip it)")
-    parser.add_argument("--quick", action="store_true",
-                        help="a short run: 5 repeats and a 5 s real-time run")
-    parser.add_argument("--multithreaded-blas", action="store_true",
-                        help="leave OpenBLAS its default threads (every riverbridge process "
-                             "limits it to one; this shows what that saves)")
+    parser.add_argument(
+        "--tuned-malloc",
+        action="store_true",
+        help="re-run under the glibc malloc thresholds that avoid page faults",
+    )
+    parser.add_argument(
+        "--rtf-seconds",
+        type=float,
+        default=30.0,
+        help="length of the real-time run with every sensor on (0: skip it)",
+    )
+    parser.add_argument(
+        "--quick", action="store_true", help="a short run: 5 repeats and a 5 s real-time run"
+    )
+    parser.add_argument(
+        "--multithreaded-blas",
+        action="store_true",
+        help="leave OpenBLAS its default threads (every riverbridge process "
+        "limits it to one; this shows what that saves)",
+    )
     args = parser.parse_args(argv)
     if not args.multithreaded_blas:
         single_threaded_blas()
@@ -309,10 +365,12 @@ def main(argv: list[str] | None = None) -> int:
     cfg = SimConfig()
     start = time.perf_counter()
     scene = build_scene(cfg.scene, seed=cfg.seed)
-    print(f"scene: {scene.triangle_count:,} triangles, built in "
-          f"{time.perf_counter() - start:.2f} s; threads {args.threads}; malloc "
-          f"{'tuned' if os.environ.get('MALLOC_MMAP_THRESHOLD_') else 'default'}; "
-          f"{os.cpu_count()} CPUs; load average {os.getloadavg()[0]:.2f}")
+    print(
+        f"scene: {scene.triangle_count:,} triangles, built in "
+        f"{time.perf_counter() - start:.2f} s; threads {args.threads}; malloc "
+        f"{'tuned' if os.environ.get('MALLOC_MMAP_THRESHOLD_') else 'default'}; "
+        f"{os.cpu_count()} CPUs; load average {os.getloadavg()[0]:.2f}"
+    )
     core_benchmarks(args, scene)
     if args.rtf_seconds > 0:
         run_realtime(args.rtf_seconds, cfg, scene)

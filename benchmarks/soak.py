@@ -67,8 +67,13 @@ class Stack:
 
     def __init__(self) -> None:
         self.process = subprocess.Popen(
-            [sys.executable, "-m", "clients.stack.up_cli", "--port", "0"], cwd=ROOT,
-            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, bufsize=1)
+            [sys.executable, "-m", "clients.stack.up_cli", "--port", "0"],
+            cwd=ROOT,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.STDOUT,
+            text=True,
+            bufsize=1,
+        )
         self.pids: dict[str, int] = {"up": self.process.pid}
         self.url = ""
 
@@ -92,8 +97,9 @@ class Stack:
 
 
 def subscribe(topic: str, type_name: str, compression: str = "cbor") -> str:
-    return json.dumps({"op": "subscribe", "topic": topic, "type": type_name,
-                       "compression": compression})
+    return json.dumps(
+        {"op": "subscribe", "topic": topic, "type": type_name, "compression": compression}
+    )
 
 
 async def imu_probe(url: str, latencies_ms: list[float], stop: asyncio.Event) -> None:
@@ -104,8 +110,9 @@ async def imu_probe(url: str, latencies_ms: list[float], stop: asyncio.Event) ->
                 while not stop.is_set():
                     frame = await ws.recv()
                     stamp = json.loads(frame)["msg"]["header"]["stamp"]
-                    latencies_ms.append(time.time() * 1e3 - stamp["sec"] * 1e3
-                                        - stamp["nanosec"] / 1e6)
+                    latencies_ms.append(
+                        time.time() * 1e3 - stamp["sec"] * 1e3 - stamp["nanosec"] / 1e6
+                    )
         await asyncio.sleep(0.5)
 
 
@@ -113,10 +120,11 @@ async def slow_client(url: str, samples: Samples, stop: asyncio.Event) -> None:
     while not stop.is_set():
         with contextlib.suppress(OSError, ConnectionClosed):
             async with websockets.connect(url, max_size=None, max_queue=1) as ws:
-                for topic, type_name in (("/lidar/points", "sensor_msgs/msg/PointCloud2"),
-                                         ("/camera/image/compressed",
-                                          "sensor_msgs/msg/CompressedImage"),
-                                         ("/imu/data", "sensor_msgs/msg/Imu")):
+                for topic, type_name in (
+                    ("/lidar/points", "sensor_msgs/msg/PointCloud2"),
+                    ("/camera/image/compressed", "sensor_msgs/msg/CompressedImage"),
+                    ("/imu/data", "sensor_msgs/msg/Imu"),
+                ):
                     await ws.send(subscribe(topic, type_name))
                 while not stop.is_set():
                     await ws.recv()
@@ -125,17 +133,28 @@ async def slow_client(url: str, samples: Samples, stop: asyncio.Event) -> None:
         await asyncio.sleep(0.5)
 
 
-async def vanishing_client(url: str, period_s: float, samples: Samples,
-                           stop: asyncio.Event) -> None:
+async def vanishing_client(
+    url: str, period_s: float, samples: Samples, stop: asyncio.Event
+) -> None:
     while not stop.is_set():
         with contextlib.suppress(OSError, ConnectionClosed):
             ws = await websockets.connect(url, max_size=None)
             await ws.send(subscribe("/lidar/points", "sensor_msgs/msg/PointCloud2"))
             await ws.send(subscribe("/odom", "nav_msgs/msg/Odometry", "none"))
-            await ws.send(json.dumps({"op": "advertise_service", "service": "/vanishing",
-                                      "type": "std_srvs/srv/Trigger"}))
-            await ws.send(json.dumps({"op": "call_service", "id": 1,
-                                      "service": "/rosapi/topics_and_raw_types"}))
+            await ws.send(
+                json.dumps(
+                    {
+                        "op": "advertise_service",
+                        "service": "/vanishing",
+                        "type": "std_srvs/srv/Trigger",
+                    }
+                )
+            )
+            await ws.send(
+                json.dumps(
+                    {"op": "call_service", "id": 1, "service": "/rosapi/topics_and_raw_types"}
+                )
+            )
             await asyncio.sleep(min(1.0, period_s / 2))
             ws.transport.abort()  # gone without a closing handshake
             samples.vanished += 1
@@ -151,8 +170,11 @@ def sample_minute(stack: Stack, samples: Samples, latencies_ms: list[float]) -> 
     samples.imu_p99_ms.append(window[int(0.99 * (len(window) - 1))] if window else float("nan"))
     minute = len(samples.imu_count)
     rss = ", ".join(f"{n} {v[-1]:.0f}" for n, v in samples.rss_mib.items())
-    print(f"minute {minute}: IMU n={len(window)} p50 {samples.imu_p50_ms[-1]:.1f} "
-          f"p99 {samples.imu_p99_ms[-1]:.1f} ms; RSS MiB: {rss}", flush=True)
+    print(
+        f"minute {minute}: IMU n={len(window)} p50 {samples.imu_p50_ms[-1]:.1f} "
+        f"p99 {samples.imu_p99_ms[-1]:.1f} ms; RSS MiB: {rss}",
+        flush=True,
+    )
 
 
 async def soak(minutes: int, vanishing_period_s: float) -> Samples:
@@ -161,10 +183,11 @@ async def soak(minutes: int, vanishing_period_s: float) -> Samples:
     try:
         await asyncio.wait_for(ready.wait(), 300)
         latencies_ms: list[float] = []
-        clients = [asyncio.create_task(imu_probe(stack.url, latencies_ms, stop)),
-                   asyncio.create_task(slow_client(stack.url, samples, stop)),
-                   asyncio.create_task(vanishing_client(stack.url, vanishing_period_s,
-                                                        samples, stop))]
+        clients = [
+            asyncio.create_task(imu_probe(stack.url, latencies_ms, stop)),
+            asyncio.create_task(slow_client(stack.url, samples, stop)),
+            asyncio.create_task(vanishing_client(stack.url, vanishing_period_s, samples, stop)),
+        ]
         for _ in range(minutes):
             await asyncio.sleep(60)
             sample_minute(stack, samples, latencies_ms)
@@ -198,12 +221,19 @@ def write_outputs(samples: Samples, output: Path) -> None:
     with (output / "soak.csv").open("w", newline="") as handle:
         writer = csv.writer(handle)
         names = list(samples.rss_mib)
-        writer.writerow(["minute", *(f"rss_mib_{n}" for n in names), "imu_n", "imu_p50_ms",
-                         "imu_p99_ms"])
+        writer.writerow(
+            ["minute", *(f"rss_mib_{n}" for n in names), "imu_n", "imu_p50_ms", "imu_p99_ms"]
+        )
         for i, minute in enumerate(minutes):
-            writer.writerow([minute, *(f"{samples.rss_mib[n][i]:.1f}" for n in names),
-                             samples.imu_count[i], f"{samples.imu_p50_ms[i]:.2f}",
-                             f"{samples.imu_p99_ms[i]:.2f}"])
+            writer.writerow(
+                [
+                    minute,
+                    *(f"{samples.rss_mib[n][i]:.1f}" for n in names),
+                    samples.imu_count[i],
+                    f"{samples.imu_p50_ms[i]:.2f}",
+                    f"{samples.imu_p99_ms[i]:.2f}",
+                ]
+            )
     figure, (memory, latency) = plt.subplots(2, 1, figsize=(9, 7), sharex=True)
     for name, series in samples.rss_mib.items():
         memory.plot(minutes, series, marker="o", label=name)
@@ -229,11 +259,15 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     samples = asyncio.run(soak(args.minutes, args.vanishing_period))
     write_outputs(samples, args.output)
-    print(f"vanishing connections: {samples.vanished}; frames the slow client read: "
-          f"{samples.slow_frames}")
+    print(
+        f"vanishing connections: {samples.vanished}; frames the slow client read: "
+        f"{samples.slow_frames}"
+    )
     for name, series in samples.rss_mib.items():
-        print(f"RSS {name}: first {series[0]:.0f} MiB, last {series[-1]:.0f} MiB, after "
-              f"minute {WARM_UP_MINUTES}: {growth_mib_per_min(series):+.2f} MiB/min")
+        print(
+            f"RSS {name}: first {series[0]:.0f} MiB, last {series[-1]:.0f} MiB, after "
+            f"minute {WARM_UP_MINUTES}: {growth_mib_per_min(series):+.2f} MiB/min"
+        )
     print(f"IMU p99 per minute (ms): {[round(v, 1) for v in samples.imu_p99_ms]}")
     print(f"wrote {args.output / 'soak.csv'} and {args.output / 'soak.png'}")
     return 0

@@ -52,7 +52,8 @@ class HandshakePolicy:
         if origin is None or not self.allowed_origins:
             return True
         return same_origin(origin, host_header) or any(
-            fnmatchcase(origin, pattern) for pattern in self.allowed_origins)
+            fnmatchcase(origin, pattern) for pattern in self.allowed_origins
+        )
 
     def refusal(self, request: Request, clients: int) -> tuple[int, str] | None:
         """(HTTP status, body) refusing a websocket handshake, or None to let it proceed."""

@@ -76,8 +76,7 @@ class Context:
     for a call that handles none: a deadline, an in-process source) and the effects produced.
     """
 
-    def __init__(self, state: BridgeState, now_ns: int,
-                 frame: InboundFrame | None = None) -> None:
+    def __init__(self, state: BridgeState, now_ns: int, frame: InboundFrame | None = None) -> None:
         self.state = state
         self.now_ns = now_ns
         self.frame = frame
@@ -89,21 +88,25 @@ class Context:
         """Queue a JSON op for a client; it will never be dropped from the send queue."""
         session = self.state.sessions.get(client_id)
         if session is not None:
-            self.effects.append(Send(client_id, ControlMessage(payload), None,
-                                     session.fragment_size_for()))
+            self.effects.append(
+                Send(client_id, ControlMessage(payload), None, session.fragment_size_for())
+            )
 
-    def release(self, session: ClientSession, subscription: Subscription,
-                release: Release) -> None:
+    def release(self, session: ClientSession, subscription: Subscription, release: Release) -> None:
         """Turn a subscription's release into deliveries and a wake-up deadline."""
         encoding = subscription.settings.compression
         fragment_size = session.fragment_size_for(subscription)
         for message in release.messages:
-            self.effects.append(Send(session.client_id,
-                                     Delivery(message, subscription.spelling, encoding),
-                                     subscription.topic, fragment_size))
+            self.effects.append(
+                Send(
+                    session.client_id,
+                    Delivery(message, subscription.spelling, encoding),
+                    subscription.topic,
+                    fragment_size,
+                )
+            )
         if release.wake_at_ns is not None:
-            self.schedule(("release", session.client_id, subscription.topic),
-                          release.wake_at_ns)
+            self.schedule(("release", session.client_id, subscription.topic), release.wake_at_ns)
 
     def publish(self, message: TopicMessage, origin_node: str) -> None:
         """Hand a message to every sink (local subscribers first)."""
@@ -126,18 +129,32 @@ class Context:
     def close(self, client_id: int, code: int, reason: str) -> None:
         self.effects.append(Close(client_id, code, reason))
 
-    def problem(self, session: ClientSession, op: str, op_id: OpId, text: str,
-                level: StatusLevel = StatusLevel.ERROR, exc_info: BaseException | None = None,
-                ) -> None:
+    def problem(
+        self,
+        session: ClientSession,
+        op: str,
+        op_id: OpId,
+        text: str,
+        level: StatusLevel = StatusLevel.ERROR,
+        exc_info: BaseException | None = None,
+    ) -> None:
         """Log one short line naming client, op, id and problem (rate-limited per client,
         `bridge.problems`); tell the client if it opted in with `set_level`."""
         text = safe_text(text)
         if self.note_problem(session):
-            log_level = {StatusLevel.INFO: logging.INFO,
-                         StatusLevel.WARNING: logging.WARNING}.get(level, logging.ERROR)
+            log_level = {StatusLevel.INFO: logging.INFO, StatusLevel.WARNING: logging.WARNING}.get(
+                level, logging.ERROR
+            )
             shown_id = safe_text(op_id, 80) if isinstance(op_id, str) else echo(op_id, 80)
-            logger.log(log_level, "[%s] op=%s id=%s: %s", session.node, safe_text(op, 60),
-                       shown_id, text, exc_info=exc_info)
+            logger.log(
+                log_level,
+                "[%s] op=%s id=%s: %s",
+                session.node,
+                safe_text(op, 60),
+                shown_id,
+                text,
+                exc_info=exc_info,
+            )
         if level >= session.status_level and session.status_level != StatusLevel.NONE:
             status: JsonObject = {"op": "status", "level": level.name.lower(), "msg": text}
             if op_id is not None:

@@ -34,7 +34,8 @@ from schemas.values import JsonObject, JsonValue, OpId
 logger = logging.getLogger("bridge.core")
 
 OP_ROUTES: dict[str, OpRoute] = merge_routes(
-    topics.ROUTES, services.ROUTES, actions.ROUTES, fragments.ROUTES, levels.ROUTES, auth.ROUTES)
+    topics.ROUTES, services.ROUTES, actions.ROUTES, fragments.ROUTES, levels.ROUTES, auth.ROUTES
+)
 
 # Deadline keys are tuples whose first item selects the handler; the rest are its arguments.
 DEADLINE_HANDLERS: dict[str, Callable[..., None]] = {
@@ -69,8 +70,9 @@ class BridgeCore:
         # client must authenticate first when the bridge has an auth secret.
         authenticated = node is not None or self.state.config.auth_secret is None
         node = node or f"/rosbridge_client_{client_id}"
-        self.state.sessions[client_id] = ClientSession(client_id, node, peer,
-                                                       authenticated=authenticated)
+        self.state.sessions[client_id] = ClientSession(
+            client_id, node, peer, authenticated=authenticated
+        )
         logger.info("[%s] connected from %s", node, peer or "?")
         return client_id
 
@@ -90,8 +92,9 @@ class BridgeCore:
 
     # -- inbound -----------------------------------------------------------------------------
 
-    def receive(self, client_id: int, data: bytes | str, arrived_ns: int,
-                now_ns: int) -> list[Effect]:
+    def receive(
+        self, client_id: int, data: bytes | str, arrived_ns: int, now_ns: int
+    ) -> list[Effect]:
         """Decode and handle one websocket frame (text = JSON, binary = CBOR or JSON) that was
         read at `arrived_ns`. The edge splits this up: `read_frame`, `offload`, `receive_frame`.
         """
@@ -110,8 +113,11 @@ class BridgeCore:
         hand its result back as `frame.checked` to `receive_frame`.
         """
         message = frame.message
-        if (frame.wire_bytes < self.state.config.offload_threshold_bytes
-                or not isinstance(message, dict) or message.get("op") != "publish"):
+        if (
+            frame.wire_bytes < self.state.config.offload_threshold_bytes
+            or not isinstance(message, dict)
+            or message.get("op") != "publish"
+        ):
             return None
         raw = message.get("msg")
         if not isinstance(raw, dict) or payload_size(raw) * 2 >= frame.wire_bytes:
@@ -124,8 +130,11 @@ class BridgeCore:
     def _presumed_spec(self, message: JsonObject) -> MessageSpec | None:
         topic = message.get("topic")
         try:
-            entry = self.state.graph.topics.get(absolute_name(topic)) if isinstance(
-                topic, str) else None
+            entry = (
+                self.state.graph.topics.get(absolute_name(topic))
+                if isinstance(topic, str)
+                else None
+            )
         except InvalidNameError:
             return None
         type_name = entry.type_name if entry is not None else message.get("type")
@@ -150,8 +159,13 @@ class BridgeCore:
         """Handle an op of an in-process client (`connect(node=...)`): no frame, no wire."""
         return self._receive(client_id, message, None, now_ns)
 
-    def _receive(self, client_id: int, message: JsonValue | RefusedFrame,
-                 frame: InboundFrame | None, now_ns: int) -> list[Effect]:
+    def _receive(
+        self,
+        client_id: int,
+        message: JsonValue | RefusedFrame,
+        frame: InboundFrame | None,
+        now_ns: int,
+    ) -> list[Effect]:
         ctx = Context(self.state, now_ns, frame)
         session = self.state.sessions.get(client_id)
         if session is None or session.closing:
@@ -169,27 +183,34 @@ class BridgeCore:
             self._dispatch_guarded(ctx, session, message)
         return ctx.effects
 
-    def _dispatch_guarded(self, ctx: Context, session: ClientSession,
-                          message: JsonValue | RefusedFrame) -> None:
+    def _dispatch_guarded(
+        self, ctx: Context, session: ClientSession, message: JsonValue | RefusedFrame
+    ) -> None:
         """`_dispatch`, where a bug costs one op: never the connection (1011) or the server."""
         try:
             self._dispatch(ctx, session, message)
         except Exception as exc:
             head = message if isinstance(message, dict) else {}
-            ctx.problem(session, str(head.get("op", "?")), reply_id(head.get("id")),
-                        f"internal error: {echo(exc)}", exc_info=exc)
+            ctx.problem(
+                session,
+                str(head.get("op", "?")),
+                reply_id(head.get("id")),
+                f"internal error: {echo(exc)}",
+                exc_info=exc,
+            )
             with contextlib.suppress(Exception):
-                answer_failed_request(ctx, session, head, f"internal error: {echo(exc)}",
-                                      log=False)
+                answer_failed_request(ctx, session, head, f"internal error: {echo(exc)}", log=False)
 
-    def _dispatch(self, ctx: Context, session: ClientSession,
-                  message: JsonValue | RefusedFrame) -> None:
+    def _dispatch(
+        self, ctx: Context, session: ClientSession, message: JsonValue | RefusedFrame
+    ) -> None:
         if isinstance(message, RefusedFrame):
             answer_failed_request(ctx, session, message.head, message.problem)
             return
         if not isinstance(message, dict):
-            ctx.problem(session, "?", None,
-                        f"message must be a JSON object, got {type(message).__name__}")
+            ctx.problem(
+                session, "?", None, f"message must be a JSON object, got {type(message).__name__}"
+            )
             return
         op_name, op_id = message.get("op"), reply_id(message.get("id"))
         shown_op = safe_text(str(op_name), 60) if op_name is not None else "?"
@@ -197,13 +218,16 @@ class BridgeCore:
             set_fragment_size(ctx, session, message["fragment_size"], shown_op, op_id)
         route = OP_ROUTES.get(op_name) if isinstance(op_name, str) else None
         if route is None:
-            what = ("message without an op" if op_name is None
-                    else f"Unknown operation: {shown_op}")
+            what = "message without an op" if op_name is None else f"Unknown operation: {shown_op}"
             ctx.problem(session, shown_op, op_id, what)
             return
         if not session.authenticated and route.op != "auth":
-            answer_failed_request(ctx, session, message, "not authenticated: this bridge needs "
-                                  "a valid auth op (rosauth) before any other")
+            answer_failed_request(
+                ctx,
+                session,
+                message,
+                "not authenticated: this bridge needs a valid auth op (rosauth) before any other",
+            )
             return
         try:
             route.run(ctx, session, message)
@@ -228,9 +252,16 @@ class BridgeCore:
         """Receive every message published in the graph from now on (e.g. a DDS mirror)."""
         self.state.sinks.append(sink)
 
-    def publish_external(self, node: str, topic: str, type_name: str, msg: JsonObject,
-                         now_ns: int, cdr: bytes | None = None,
-                         latch: bool = False) -> list[Effect]:
+    def publish_external(
+        self,
+        node: str,
+        topic: str,
+        type_name: str,
+        msg: JsonObject,
+        now_ns: int,
+        cdr: bytes | None = None,
+        latch: bool = False,
+    ) -> list[Effect]:
         """Publish a message from a source outside the websocket clients (a DDS mirror, the
         bridge's own telemetry).
 
@@ -243,28 +274,35 @@ class BridgeCore:
         spec = self.state.registry.message(type_name)
         self.state.graph.declare_type(name, spec.name)
         entry = self.state.graph.add_publisher(name, node, None, latch=latch)
-        message = TopicMessage(name, spec.name, normalize(spec, msg, now_ns=now_ns), now_ns,
-                               self.state.registry, cdr)
+        message = TopicMessage(
+            name, spec.name, normalize(spec, msg, now_ns=now_ns), now_ns, self.state.registry, cdr
+        )
         if latch:
             entry.latched = message
         ctx.publish(message, node)
         return ctx.effects
 
 
-def set_fragment_size(ctx: Context, session: ClientSession, value: JsonValue, op_name: str,
-                      op_id: OpId) -> None:
+def set_fragment_size(
+    ctx: Context, session: ClientSession, value: JsonValue, op_name: str, op_id: OpId
+) -> None:
     """Any message carrying `fragment_size` sets the client-wide size (protocol §1.2)."""
     if value is None:
         session.fragment_size = None
     elif isinstance(value, int) and not isinstance(value, bool) and value > 0:
         session.fragment_size = max(value, MIN_FRAGMENT_SIZE)
     else:
-        ctx.problem(session, op_name, op_id,
-                    f"fragment_size must be a positive integer or null, got {echo(value, 60)}")
+        ctx.problem(
+            session,
+            op_name,
+            op_id,
+            f"fragment_size must be a positive integer or null, got {echo(value, 60)}",
+        )
 
 
-def answer_failed_request(ctx: Context, session: ClientSession, message: JsonObject,
-                          problem: str, log: bool = True) -> None:
+def answer_failed_request(
+    ctx: Context, session: ClientSession, message: JsonObject, problem: str, log: bool = True
+) -> None:
     """Log an op that could not be handled; a caller waiting for an answer still gets one.
 
     A `call_service` is answered with `result: false`, a `send_action_goal` with a failed
@@ -275,14 +313,13 @@ def answer_failed_request(ctx: Context, session: ClientSession, message: JsonObj
     op_name, op_id = message.get("op"), reply_id(message.get("id"))
     problem = safe_text(problem)
     if log:
-        ctx.problem(session, safe_text(str(op_name), 60) if op_name is not None else "?", op_id,
-                    problem)
+        ctx.problem(
+            session, safe_text(str(op_name), 60) if op_name is not None else "?", op_id, problem
+        )
     service, action = message.get("service"), message.get("action")
     if op_name == "call_service" and isinstance(service, str):
-        services.respond(ctx, session.client_id, service[:MAX_NAME_CHARS], op_id, problem,
-                         False)
+        services.respond(ctx, session.client_id, service[:MAX_NAME_CHARS], op_id, problem, False)
     elif op_name == "service_response":
         services.settle_unparsed_response(ctx, session, message, problem)
     elif op_name == "send_action_goal" and isinstance(action, str):
         actions.fail_goal(ctx, session.client_id, action[:MAX_NAME_CHARS], op_id, problem)
-

@@ -90,7 +90,8 @@ class Graph:
         elif entry.type_name != type_name:
             raise GraphConflictError(
                 f"Tried to register topic {name} with type {type_name} but it is already "
-                f"established with type {entry.type_name}")
+                f"established with type {entry.type_name}"
+            )
         return entry
 
     def add_publisher(self, name: str, node: str, advert_id: OpId, latch: bool) -> TopicEntry:
@@ -100,8 +101,9 @@ class Graph:
             entry.latching.add(node)
         return entry
 
-    def remove_publisher(self, name: str, node: str, advert_id: OpId = None,
-                         every_id: bool = True) -> None:
+    def remove_publisher(
+        self, name: str, node: str, advert_id: OpId = None, every_id: bool = True
+    ) -> None:
         """Drop one advertisement id (or all of the node's) and forget the topic if unused."""
         entry = self.topics.get(name)
         if entry is None or node not in entry.publishers:
@@ -137,8 +139,9 @@ class Graph:
 
     def typed_topics(self) -> list[tuple[str, str]]:
         """(name, type) of every topic whose type is known, sorted by name."""
-        return sorted((t.name, t.type_name) for t in self.topics.values()
-                      if t.type_name is not None)
+        return sorted(
+            (t.name, t.type_name) for t in self.topics.values() if t.type_name is not None
+        )
 
     def node_topics(self, node: str) -> tuple[list[str], list[str]]:
         """(publishing, subscribing) topic names of `node`, sorted."""

@@ -28,8 +28,9 @@ def server_version() -> str:
         return "riverbridge"
 
 
-def respond(connection: ServerConnection, status: int, body: bytes | str,
-            content_type: str) -> Response:
+def respond(
+    connection: ServerConnection, status: int, body: bytes | str, content_type: str
+) -> Response:
     """A response with ``body`` and the given content type (websockets defaults to text)."""
     response = connection.respond(status, "")
     response.body = body.encode("utf-8") if isinstance(body, str) else body
@@ -46,8 +47,12 @@ def version_page(connection: ServerConnection, request: Request) -> Response:
 
 
 def index_page(connection: ServerConnection, request: Request) -> Response:
-    return respond(connection, 200, "riverbridge: a rosbridge v2 server; connect with a "
-                   "websocket.\n", "text/plain; charset=utf-8")
+    return respond(
+        connection,
+        200,
+        "riverbridge: a rosbridge v2 server; connect with a websocket.\n",
+        "text/plain; charset=utf-8",
+    )
 
 
 class HttpRoutes:

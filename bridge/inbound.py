@@ -85,8 +85,11 @@ def _head(message: JsonValue) -> JsonObject:
     head: JsonObject = {}
     for key in _HEAD_KEYS:
         value = message.get(key)
-        if isinstance(value, str) and len(value) <= MAX_NAME_CHARS and describe_value(
-                value) is None:
+        if (
+            isinstance(value, str)
+            and len(value) <= MAX_NAME_CHARS
+            and describe_value(value) is None
+        ):
             head[key] = value
     op_id = reply_id(message.get("id"))
     if op_id is not None and describe_value(op_id) is None:

@@ -62,8 +62,13 @@ class Entry:
 class Intake:
     """The inbound pipeline of one connection; `apply` carries out the core's effects."""
 
-    def __init__(self, client_id: int, core: BridgeCore, pool: Executor,
-                 apply: Callable[[list[Effect]], None]) -> None:
+    def __init__(
+        self,
+        client_id: int,
+        core: BridgeCore,
+        pool: Executor,
+        apply: Callable[[list[Effect]], None],
+    ) -> None:
         self._client_id = client_id
         self._core = core
         self._pool = pool
@@ -135,8 +140,9 @@ class Intake:
                 continue
             self.pending_bytes -= entry.frame.wire_bytes
             if entry.problem is not None:
-                self._apply(self._core.receive_invalid(self._client_id, entry.problem,
-                                                       time.time_ns()))
+                self._apply(
+                    self._core.receive_invalid(self._client_id, entry.problem, time.time_ns())
+                )
             else:
                 self._handle(entry.frame)
         self._waiting = held

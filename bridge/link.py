@@ -68,10 +68,19 @@ def estimated_size(send: Send) -> int:
 class ClientLink:
     """Outgoing side of one websocket: `offer` each `Send`; `close` when the client leaves."""
 
-    def __init__(self, client_id: int, ws: ServerConnection, *, limit_bytes: int,
-                 pool: Executor, offload_bytes: int, reply_budget_bytes: int,
-                 delivered: Delivered, over_budget: Callable[[str], None],
-                 node: str | None = None) -> None:
+    def __init__(
+        self,
+        client_id: int,
+        ws: ServerConnection,
+        *,
+        limit_bytes: int,
+        pool: Executor,
+        offload_bytes: int,
+        reply_budget_bytes: int,
+        delivered: Delivered,
+        over_budget: Callable[[str], None],
+        node: str | None = None,
+    ) -> None:
         self.client_id = client_id
         self.node = node or f"client {client_id}"  # names the client in log lines
         self.ws = ws
@@ -113,8 +122,12 @@ class ClientLink:
         """Write `send` now or queue it; True if publishers feeding this link should pause."""
         if self.closed or self.closing:
             return False
-        if (not len(self.queue) and send.drop_key not in self._busy and self._has_room()
-                and not self._needs_worker(send)):
+        if (
+            not len(self.queue)
+            and send.drop_key not in self._busy
+            and self._has_room()
+            and not self._needs_worker(send)
+        ):
             frames = self._render(send)
             if frames is not None:
                 self._write(send, frames)
@@ -147,8 +160,9 @@ class ClientLink:
             self._over_budget(self.replies.reason())  # the edge closes the client
         victims = self.queue.push(send, nbytes, frames, self._outside_bytes())
         if victims:
-            logger.debug("client %d: dropped %d oldest of %s", self.client_id, len(victims),
-                         send.drop_key)
+            logger.debug(
+                "client %d: dropped %d oldest of %s", self.client_id, len(victims), send.drop_key
+            )
 
     def _service(self) -> None:
         """Write waiting messages while the socket has room."""
@@ -178,9 +192,13 @@ class ClientLink:
         key = waiting.send.drop_key
         try:
             # (the fragment id is taken here, on the loop, so that ids stay unique)
-            future = self._loop.run_in_executor(self._pool, render, waiting.send.item,
-                                                waiting.send.fragment_size,
-                                                self._next_fragment_id())
+            future = self._loop.run_in_executor(
+                self._pool,
+                render,
+                waiting.send.item,
+                waiting.send.fragment_size,
+                self._next_fragment_id(),
+            )
         except RuntimeError:  # the pool has shut down: the server is stopping
             return
         self._busy.add(key)
@@ -210,11 +228,16 @@ class ClientLink:
             logger.warning("%s", summary)
         full, deadline = self._problems.note(now_ns)
         if full:
-            logger.error("[%s] cannot encode a message for %s: %s", self.node,
-                         safe_text(send.drop_key or "a reply", 120), echo(exc))
+            logger.error(
+                "[%s] cannot encode a message for %s: %s",
+                self.node,
+                safe_text(send.drop_key or "a reply", 120),
+                echo(exc),
+            )
         if deadline is not None and not self.closed:
-            self._summary_timer = self._loop.call_later((deadline - now_ns) / NS_PER_S,
-                                                        self._log_summary)
+            self._summary_timer = self._loop.call_later(
+                (deadline - now_ns) / NS_PER_S, self._log_summary
+            )
 
     def _log_summary(self) -> None:
         self._summary_timer = None
@@ -345,8 +368,13 @@ class ClientLink:
     def _give_up(self, why: str) -> None:
         """Stop pacing publishers for this link until it has caught up; it drops instead."""
         self._stalled = True
-        logger.info("client %d %s: publishers no longer wait for it; past %d bytes it loses "
-                    "its oldest messages per topic", self.client_id, why, self.queue.limit_bytes)
+        logger.info(
+            "client %d %s: publishers no longer wait for it; past %d bytes it loses "
+            "its oldest messages per topic",
+            self.client_id,
+            why,
+            self.queue.limit_bytes,
+        )
 
     async def drained(self) -> None:
         """Return once the queue is under `pause_bytes`, or the link has proved stalled or

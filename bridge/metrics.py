@@ -61,40 +61,60 @@ class SnapshotCollector:
         snapshot = self._snapshot
         topics = sorted(snapshot.topics.items())
         messages = CounterMetricFamily(
-            "riverbridge_messages", "Messages published into (in) or delivered out of (out) "
-            "the bridge, per topic.", labels=["topic", "direction"])
-        wire = CounterMetricFamily("riverbridge_wire_bytes", "Websocket payload bytes per "
-                                   "topic.", labels=["topic", "direction"])
+            "riverbridge_messages",
+            "Messages published into (in) or delivered out of (out) the bridge, per topic.",
+            labels=["topic", "direction"],
+        )
+        wire = CounterMetricFamily(
+            "riverbridge_wire_bytes",
+            "Websocket payload bytes per topic.",
+            labels=["topic", "direction"],
+        )
         for direction in ("in", "out"):
             for topic, traffic in topics:
                 labels = [safe_label(topic), direction]
                 messages.add_metric(labels, getattr(traffic, f"messages_{direction}"))
                 wire.add_metric(labels, getattr(traffic, f"wire_bytes_{direction}"))
         payload = CounterMetricFamily(
-            "riverbridge_payload_bytes", "Serialized ROS 2 (CDR) bytes of the stamped messages "
-            "published, per topic.", labels=["topic"])
+            "riverbridge_payload_bytes",
+            "Serialized ROS 2 (CDR) bytes of the stamped messages published, per topic.",
+            labels=["topic"],
+        )
         for topic, traffic in topics:
             payload.add_metric([safe_label(topic)], traffic.payload_bytes_in)
         dropped = CounterMetricFamily(
-            "riverbridge_dropped", "Messages dropped for a slow subscriber (send queue or "
-            "subscription queue), per topic and subscriber.", labels=["topic", "subscriber"])
+            "riverbridge_dropped",
+            "Messages dropped for a slow subscriber (send queue or "
+            "subscription queue), per topic and subscriber.",
+            labels=["topic", "subscriber"],
+        )
         for (topic, subscriber), count in sorted(snapshot.drops.items()):
             dropped.add_metric([safe_label(topic), safe_label(subscriber)], count)
         yield from (messages, wire, payload, dropped)
-        yield GaugeMetricFamily("riverbridge_clients", "Connected websocket clients.",
-                                value=snapshot.clients)
-        yield GaugeMetricFamily("riverbridge_process_cpu_percent", "CPU of the bridge process "
-                                "over the last stats interval (100 = one core).",
-                                value=snapshot.cpu_percent)
-        yield GaugeMetricFamily("riverbridge_process_resident_memory_bytes",
-                                "Resident memory of the bridge process.", value=snapshot.rss_bytes)
-        yield CounterMetricFamily("riverbridge_trace_spans_discarded", "Trace spans discarded "
-                                  "because the bounded span buffer was full.",
-                                  value=snapshot.spans_discarded)
+        yield GaugeMetricFamily(
+            "riverbridge_clients", "Connected websocket clients.", value=snapshot.clients
+        )
+        yield GaugeMetricFamily(
+            "riverbridge_process_cpu_percent",
+            "CPU of the bridge process over the last stats interval (100 = one core).",
+            value=snapshot.cpu_percent,
+        )
+        yield GaugeMetricFamily(
+            "riverbridge_process_resident_memory_bytes",
+            "Resident memory of the bridge process.",
+            value=snapshot.rss_bytes,
+        )
+        yield CounterMetricFamily(
+            "riverbridge_trace_spans_discarded",
+            "Trace spans discarded because the bounded span buffer was full.",
+            value=snapshot.spans_discarded,
+        )
         if snapshot.restarts:
             restarts = CounterMetricFamily(
-                "riverbridge_component_restarts", "Restarts of each component by riverbridge up "
-                "(/riverbridge/restarts).", labels=["component"])
+                "riverbridge_component_restarts",
+                "Restarts of each component by riverbridge up (/riverbridge/restarts).",
+                labels=["component"],
+            )
             for component, count in sorted(snapshot.restarts.items()):
                 restarts.add_metric([safe_label(component)], count)
             yield restarts

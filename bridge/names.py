@@ -36,8 +36,9 @@ def _check_relative(name: str) -> None:
     if not name:
         raise _refuse(name, "it is empty")
     if not _ALLOWED.fullmatch(name):
-        raise _refuse(name, "only letters, digits, '_', '/', a leading '~' and {} "
-                            "substitutions are allowed")
+        raise _refuse(
+            name, "only letters, digits, '_', '/', a leading '~' and {} substitutions are allowed"
+        )
     if name.endswith("/"):
         raise _refuse(name, "it must not end with '/'")
     if "~" in name[1:] or (name.startswith("~") and name[1:2] not in ("", "/")):
@@ -51,8 +52,9 @@ def _check_relative(name: str) -> None:
 def _substitute(match: re.Match[str]) -> str:
     key = match.group(1)
     if key not in _SUBSTITUTIONS:
-        raise InvalidNameError(f"unknown substitution {{{echo(key, 40)}}} (known: node, ns, "
-                               "namespace)")
+        raise InvalidNameError(
+            f"unknown substitution {{{echo(key, 40)}}} (known: node, ns, namespace)"
+        )
     return _SUBSTITUTIONS[key]
 
 
@@ -79,8 +81,9 @@ def absolute_name(name: str) -> str:
     if expanded.startswith("~"):
         expanded = "/" + BRIDGE_NODE_NAME + expanded[1:]
     if "{" in expanded:
-        expanded = _SUBSTITUTION.sub(_substitute, expanded.replace("/{ns}", "{ns}")
-                                     .replace("/{namespace}", "{namespace}"))
+        expanded = _SUBSTITUTION.sub(
+            _substitute, expanded.replace("/{ns}", "{ns}").replace("/{namespace}", "{namespace}")
+        )
     if not expanded.startswith("/"):
         expanded = "/" + expanded
     if not _FULL_NAME.fullmatch(expanded):

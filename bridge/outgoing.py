@@ -68,12 +68,31 @@ class TopicMessage:
     needs it.
     """
 
-    __slots__ = ("_frames", "_lock", "cdr", "cdr_bytes", "msg", "registry", "size_hint",
-                 "stamp_ns", "topic", "type_name")
+    __slots__ = (
+        "_frames",
+        "_lock",
+        "cdr",
+        "cdr_bytes",
+        "msg",
+        "registry",
+        "size_hint",
+        "stamp_ns",
+        "topic",
+        "type_name",
+    )
 
-    def __init__(self, topic: str, type_name: str, msg: dict[str, Any], stamp_ns: int,
-                 registry: TypeRegistry, cdr: bytes | None = None, *,
-                 size_hint: int | None = None, cdr_bytes: int | None = None) -> None:
+    def __init__(
+        self,
+        topic: str,
+        type_name: str,
+        msg: dict[str, Any],
+        stamp_ns: int,
+        registry: TypeRegistry,
+        cdr: bytes | None = None,
+        *,
+        size_hint: int | None = None,
+        cdr_bytes: int | None = None,
+    ) -> None:
         self.topic = topic
         self.type_name = type_name
         self.msg = msg
@@ -174,8 +193,17 @@ def render(item: Outgoing, fragment_size: int | None, fallback_id: str) -> list[
     fragment_id = fallback_id if message_id is None else message_id
     total = -(-len(text) // fragment_size)
     return [
-        WireFrame(codec_json.dumps({"op": "fragment", "id": fragment_id,
-                                    "data": text[i * fragment_size:(i + 1) * fragment_size],
-                                    "num": i, "total": total}), text=True)
+        WireFrame(
+            codec_json.dumps(
+                {
+                    "op": "fragment",
+                    "id": fragment_id,
+                    "data": text[i * fragment_size : (i + 1) * fragment_size],
+                    "num": i,
+                    "total": total,
+                }
+            ),
+            text=True,
+        )
         for i in range(total)
     ]

@@ -56,5 +56,4 @@ class ProblemLog:
         self.window_end_ns = 0
         if unlogged <= 0:
             return None
-        return (f"[{node}] {total:,} {what} in the last {span_s:.3g} s, {unlogged:,} "
-                "not logged")
+        return f"[{node}] {total:,} {what} in the last {span_s:.3g} s, {unlogged:,} not logged"

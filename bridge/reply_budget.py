@@ -39,5 +39,7 @@ class ReplyBudget:
 
     def reason(self) -> str:
         """The close reason (at most 123 bytes, as RFC 6455 allows)."""
-        return (f"{self.waiting_bytes / MIB:.1f} MiB of replies unread "
-                f"(limit {self.limit_bytes / MIB:g} MiB)")
+        return (
+            f"{self.waiting_bytes / MIB:.1f} MiB of replies unread "
+            f"(limit {self.limit_bytes / MIB:g} MiB)"
+        )

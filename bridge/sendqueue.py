@@ -52,8 +52,9 @@ class SendQueue:
     def __len__(self) -> int:
         return self._len
 
-    def push(self, send: Send, nbytes: int, frames: list[WireFrame] | None = None,
-             outside_bytes: int = 0) -> list[Send]:
+    def push(
+        self, send: Send, nbytes: int, frames: list[WireFrame] | None = None, outside_bytes: int = 0
+    ) -> list[Send]:
         """Append `send`; return the items dropped to stay within the bound (oldest first)."""
         key = send.drop_key
         stream = self._streams.get(key)

@@ -81,13 +81,19 @@ class BridgeServer:
 
     async def start(self) -> None:
         self._server = await serve(
-            self._handle, self.config.host, self.config.port,
-            compression=None, max_size=self.config.max_message_size,
-            write_limit=WRITE_HIGH_WATER, close_timeout=CLOSE_TIMEOUT_S,
-            process_request=self._process_request, ssl=tls_context(self.config),
+            self._handle,
+            self.config.host,
+            self.config.port,
+            compression=None,
+            max_size=self.config.max_message_size,
+            write_limit=WRITE_HIGH_WATER,
+            close_timeout=CLOSE_TIMEOUT_S,
+            process_request=self._process_request,
+            ssl=tls_context(self.config),
         )
-        self._telemetry_task = asyncio.create_task(self.telemetry.run(self.apply),
-                                                   name="bridge-telemetry")
+        self._telemetry_task = asyncio.create_task(
+            self.telemetry.run(self.apply), name="bridge-telemetry"
+        )
 
     async def stop(self) -> None:
         """Close every connection (1001), stop timers and workers."""
@@ -114,8 +120,11 @@ class BridgeServer:
         if "websocket" in request.headers.get("Upgrade", "").lower():
             refusal = self.access.refusal(request, len(self.links))
             if refusal is not None:
-                logger.warning("refused a websocket handshake from %s: %s",
-                               connection.remote_address, refusal[1].strip())
+                logger.warning(
+                    "refused a websocket handshake from %s: %s",
+                    connection.remote_address,
+                    refusal[1].strip(),
+                )
                 return connection.respond(*refusal)
         return self.http(connection, request)
 
@@ -128,12 +137,16 @@ class BridgeServer:
         peer = "{}:{}".format(*ws.remote_address[:2]) if ws.remote_address else ""
         client_id = self.core.connect(peer)
         link = self.links[client_id] = ClientLink(
-            client_id, ws, limit_bytes=self.config.send_buffer_bytes, pool=self._pool,
+            client_id,
+            ws,
+            limit_bytes=self.config.send_buffer_bytes,
+            pool=self._pool,
             offload_bytes=self.config.offload_threshold_bytes,
             reply_budget_bytes=self.config.reply_budget_bytes,
             delivered=self.telemetry.tracer.delivered,
             over_budget=lambda reason: self._close_over_budget(client_id, reason),
-            node=self.core.state.sessions[client_id].node)
+            node=self.core.state.sessions[client_id].node,
+        )
         paced: set[ClientLink] = set()  # links this client's messages went to that are full
 
         def apply(effects: list[Effect]) -> None:
@@ -147,9 +160,13 @@ class BridgeServer:
                 started = time.perf_counter()
                 intake.take(data, time.time_ns())
                 busy_s += time.perf_counter() - started
-                if (paced or busy_s > TURN_S or intake.in_flight > INTAKE_FRAMES
-                        or intake.pending_bytes > INTAKE_BYTES
-                        or link.queue.answers_waiting > ANSWER_BACKLOG):
+                if (
+                    paced
+                    or busy_s > TURN_S
+                    or intake.in_flight > INTAKE_FRAMES
+                    or intake.pending_bytes > INTAKE_BYTES
+                    or link.queue.answers_waiting > ANSWER_BACKLOG
+                ):
                     await self._between_turns(link, intake, paced)
                     busy_s = 0.0
         except ConnectionClosed as exc:
@@ -193,7 +210,8 @@ class BridgeServer:
                 if link is not None and not link.closing:
                     link.closing = True  # nothing more is sent to it or waited for
                     task = asyncio.get_running_loop().create_task(
-                        close_link(link, effect.code, effect.reason))
+                        close_link(link, effect.code, effect.reason)
+                    )
                     self._closing.add(task)
                     task.add_done_callback(self._closing.discard)
 
@@ -211,9 +229,15 @@ class BridgeServer:
     def stats(self) -> dict[int, dict[str, object]]:
         """Per connected client: frames sent, messages dropped per topic, items waiting and
         bytes not yet taken by the client."""
-        return {cid: {"frames_sent": link.frames_sent, "dropped": dict(link.queue.dropped),
-                      "waiting": len(link.queue), "backlog_bytes": link.backlog_bytes()}
-                for cid, link in self.links.items()}
+        return {
+            cid: {
+                "frames_sent": link.frames_sent,
+                "dropped": dict(link.queue.dropped),
+                "waiting": len(link.queue),
+                "backlog_bytes": link.backlog_bytes(),
+            }
+            for cid, link in self.links.items()
+        }
 
 
 async def close_link(link: ClientLink, code: int, reason: str) -> None:
@@ -245,8 +269,9 @@ class RunningBridge:
 
 
 @contextlib.asynccontextmanager
-async def run_bridge(config: BridgeConfig,
-                     registry: TypeRegistry | None = None) -> AsyncIterator[RunningBridge]:
+async def run_bridge(
+    config: BridgeConfig, registry: TypeRegistry | None = None
+) -> AsyncIterator[RunningBridge]:
     """Start a bridge for the duration of the `async with` block.
 
     `registry` defaults to the standard types plus `config.interface_dirs`.
@@ -259,6 +284,7 @@ async def run_bridge(config: BridgeConfig,
     try:
         if config.dds:  # imported only when asked: Cyclone DDS loads a C library
             from bridge.dds.mirror import DdsMirror
+
             joining = DdsMirror(server)
             await joining.start()
             mirror = joining
@@ -270,5 +296,3 @@ async def run_bridge(config: BridgeConfig,
 
 
 __all__ = ["BridgeServer", "RunningBridge", "run_bridge"]
-
-

@@ -57,8 +57,9 @@ class BridgeTelemetry:
         self._core = server.core
         self.tracer = BridgeTracer(self._core.state)
         self._core.add_sink(self.tracer)
-        self._core.state.rosapi[STATS_SERVICE] = RosapiService(STATS_SERVICE_TYPE,
-                                                               self._answer_stats)
+        self._core.state.rosapi[STATS_SERVICE] = RosapiService(
+            STATS_SERVICE_TYPE, self._answer_stats
+        )
         server.http.add("/metrics", self.metrics_page)
         self._sampler = ResourceSampler()
         self._identity = this_process(PROCESS_NAME)
@@ -81,10 +82,15 @@ class BridgeTelemetry:
         return drops
 
     def snapshot(self) -> MetricsSnapshot:
-        return MetricsSnapshot(dict(self.tracer.topics), self.drops(),
-                               len(self._core.state.sessions), self.cpu_percent,
-                               self._sampler.rss_bytes(), self.tracer.spans.discarded,
-                               self.restarts())
+        return MetricsSnapshot(
+            dict(self.tracer.topics),
+            self.drops(),
+            len(self._core.state.sessions),
+            self.cpu_percent,
+            self._sampler.rss_bytes(),
+            self.tracer.spans.discarded,
+            self.restarts(),
+        )
 
     def restarts(self) -> dict[str, int]:
         """Component restarts from the latched report of `riverbridge up`, if one runs."""
@@ -136,16 +142,27 @@ class BridgeTelemetry:
         if count == self._client_count:
             return []
         self._client_count = count
-        return self._core.publish_external(BRIDGE_NODE, CLIENT_COUNT_TOPIC, CLIENT_COUNT_TYPE,
-                                           {"data": count}, time.time_ns(), latch=True)
+        return self._core.publish_external(
+            BRIDGE_NODE,
+            CLIENT_COUNT_TOPIC,
+            CLIENT_COUNT_TYPE,
+            {"data": count},
+            time.time_ns(),
+            latch=True,
+        )
 
     def publish_spans(self) -> list[Effect]:
         """The spans recorded since the last call, for whoever subscribes (drained either way)."""
         spans = self.tracer.spans.drain()
         if not spans or not self._listened(TRACE_TOPIC):
             return []
-        return self._core.publish_external(BRIDGE_NODE, TRACE_TOPIC, TRACE_TYPE,
-                                           span_array_msg(self._identity, spans), time.time_ns())
+        return self._core.publish_external(
+            BRIDGE_NODE,
+            TRACE_TOPIC,
+            TRACE_TYPE,
+            span_array_msg(self._identity, spans),
+            time.time_ns(),
+        )
 
     def publish_once(self) -> list[Effect]:
         """`publish_spans`, and the bridge's ProcessStats for whoever subscribes to them."""
@@ -155,20 +172,30 @@ class BridgeTelemetry:
         if not self._listened(STATS_TOPIC):
             return effects
         traffic = self.tracer.topics.values()
-        counters = {"messages_in": sum(t.messages_in for t in traffic),
-                    "messages_out": sum(t.messages_out for t in traffic),
-                    "bytes_in": sum(t.wire_bytes_in for t in traffic),
-                    "bytes_out": sum(t.wire_bytes_out for t in traffic),
-                    "dropped": sum(self.drops().values())}
+        counters = {
+            "messages_in": sum(t.messages_in for t in traffic),
+            "messages_out": sum(t.messages_out for t in traffic),
+            "bytes_in": sum(t.wire_bytes_in for t in traffic),
+            "bytes_out": sum(t.wire_bytes_out for t in traffic),
+            "dropped": sum(self.drops().values()),
+        }
         effects += self._core.publish_external(
-            BRIDGE_NODE, STATS_TOPIC, STATS_TYPE,
-            process_stats_msg(self._identity, now_ns, self.cpu_percent,
-                              self._sampler.rss_bytes(), counters), now_ns)
+            BRIDGE_NODE,
+            STATS_TOPIC,
+            STATS_TYPE,
+            process_stats_msg(
+                self._identity, now_ns, self.cpu_percent, self._sampler.rss_bytes(), counters
+            ),
+            now_ns,
+        )
         return effects
 
-    async def run(self, apply: Callable[[list[Effect]], None],
-                  period_s: float = PUBLISH_PERIOD_S,
-                  trace_period_s: float = TRACE_PERIOD_S) -> None:
+    async def run(
+        self,
+        apply: Callable[[list[Effect]], None],
+        period_s: float = PUBLISH_PERIOD_S,
+        trace_period_s: float = TRACE_PERIOD_S,
+    ) -> None:
         """Publish spans every `trace_period_s` and stats every `period_s` until cancelled;
         `apply` carries out the effects."""
         apply(self.clients_changed())

@@ -76,8 +76,15 @@ class BridgeTracer:
             except (SchemaError, KeyError, TypeError, ValueError, AttributeError):
                 payload_bytes = 0
         traffic.payload_bytes_in += payload_bytes
-        self.spans.record(message.topic, stamp_ns, "bridge_in", frame.arrived_ns, ctx.now_ns,
-                          payload_bytes, frame.wire_bytes)
+        self.spans.record(
+            message.topic,
+            stamp_ns,
+            "bridge_in",
+            frame.arrived_ns,
+            ctx.now_ns,
+            payload_bytes,
+            frame.wire_bytes,
+        )
 
     def _learn_name(self, node: str, message: TopicMessage) -> None:
         process = message.msg.get("process")
@@ -90,8 +97,9 @@ class BridgeTracer:
         node = session.node if session is not None else f"/rosbridge_client_{client_id}"
         return self.names.get(node, node)
 
-    def delivered(self, client_id: int, delivery: Delivery, wire_bytes: int,
-                  written_ns: int) -> None:
+    def delivered(
+        self, client_id: int, delivery: Delivery, wire_bytes: int, written_ns: int
+    ) -> None:
         """A delivery's last frame was handed to the socket at `written_ns`: `fanout` runs
         from the message entering the graph to then."""
         message = delivery.message
@@ -102,5 +110,13 @@ class BridgeTracer:
             return
         stamp_ns = header_stamp_ns(message.msg)
         if stamp_ns is not None:
-            self.spans.record(message.topic, stamp_ns, "fanout", message.stamp_ns, written_ns,
-                              0, wire_bytes, self.subscriber_name(client_id))
+            self.spans.record(
+                message.topic,
+                stamp_ns,
+                "fanout",
+                message.stamp_ns,
+                written_ns,
+                0,
+                wire_bytes,
+                self.subscriber_name(client_id),
+            )

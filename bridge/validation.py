@@ -48,8 +48,9 @@ class InvalidMessage:
 CheckedMessage = ValidMessage | InvalidMessage
 
 
-def check_message(spec: MessageSpec, raw: JsonObject, *, wire_bytes: int,
-                  now_ns: int) -> CheckedMessage:
+def check_message(
+    spec: MessageSpec, raw: JsonObject, *, wire_bytes: int, now_ns: int
+) -> CheckedMessage:
     """Validate and complete a published message (`schemas.message.normalize`)."""
     try:
         msg = normalize(spec, raw, now_ns=now_ns)
@@ -73,8 +74,7 @@ class PublishCheck:
     registry: TypeRegistry
 
     def run(self) -> CheckedMessage:
-        checked = check_message(self.spec, self.raw, wire_bytes=self.wire_bytes,
-                                now_ns=self.now_ns)
+        checked = check_message(self.spec, self.raw, wire_bytes=self.wire_bytes, now_ns=self.now_ns)
         if isinstance(checked, ValidMessage) and header_stamp_ns(checked.msg) is not None:
             checked = replace(checked, cdr_bytes=self._cdr_bytes(checked.msg))
         return checked

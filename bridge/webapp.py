@@ -117,8 +117,7 @@ def mount_webapp(routes: HttpRoutes, root: Path) -> StaticSite:
     if site.built:
         logger.info("web dashboard from %s", site.root)
     else:
-        logger.warning("no web dashboard build in %s; build it with: %s", site.root,
-                       BUILD_COMMAND)
+        logger.warning("no web dashboard build in %s; build it with: %s", site.root, BUILD_COMMAND)
     return site
 
 

@@ -71,8 +71,9 @@ class ActionHost:
         try:
             args = normalize_action_values(self._registry, type, "goal", goal.args)
             values = await handler(args, feedback)
-            frame = ClientProtocol.action_result(goal, {} if values is None else values,
-                                                 status=STATUS_SUCCEEDED, result=True)
+            frame = ClientProtocol.action_result(
+                goal, {} if values is None else values, status=STATUS_SUCCEEDED, result=True
+            )
         except asyncio.CancelledError:
             if goal.goal_id not in self._cancel_requested:
                 raise
@@ -80,8 +81,9 @@ class ActionHost:
             frame = ClientProtocol.action_result(goal, {}, status=STATUS_CANCELED, result=True)
         except Exception as exc:
             logger.warning("goal %s of %s failed: %r", goal.goal_id, goal.action, exc)
-            frame = ClientProtocol.action_result(goal, str(exc) or repr(exc),
-                                                 status=STATUS_ABORTED, result=False)
+            frame = ClientProtocol.action_result(
+                goal, str(exc) or repr(exc), status=STATUS_ABORTED, result=False
+            )
         try:
             await self._send(frame)
         except ConnectionClosed as exc:

@@ -24,8 +24,12 @@ FEEDBACK_KEEP = 32
 """Feedback messages kept for a slow reader (oldest dropped): feedback is progress, not data."""
 
 
-def normalize_action_values(registry: TypeRegistry, type: str | None,
-                            part: Literal["goal", "result", "feedback"], values: Any) -> Any:
+def normalize_action_values(
+    registry: TypeRegistry,
+    type: str | None,
+    part: Literal["goal", "result", "feedback"],
+    values: Any,
+) -> Any:
     """Canonical form of goal/result/feedback values when ``type`` is a known action.
 
     Values of unknown action types, or that are not objects (a failure's error text), are
@@ -46,8 +50,14 @@ class ActionGoal:
     result come in canonical form when ``registry`` knows ``action_type``.
     """
 
-    def __init__(self, goal_id: str, action: str, action_type: str, registry: TypeRegistry,
-                 cancel: Callable[[ActionGoal], Awaitable[None]]) -> None:
+    def __init__(
+        self,
+        goal_id: str,
+        action: str,
+        action_type: str,
+        registry: TypeRegistry,
+        cancel: Callable[[ActionGoal], Awaitable[None]],
+    ) -> None:
         self.id = goal_id
         self.action = action
         self.action_type = action_type

@@ -86,11 +86,21 @@ class RosbridgeClient:
         (:mod:`clients.tracing`, docs/tracing.md); None records nothing.
     """
 
-    def __init__(self, url: str, *, encoding: Encoding = "cbor", name: str = "rosbridge-client",
-                 connect_timeout: float = 10.0, reconnect: bool = True,
-                 backoff_initial: float = 0.1, backoff_max: float = 2.0,
-                 registry: TypeRegistry | None = None, offload_bytes: int | None = None,
-                 transport: TransportConfig | None = None, tracer: Tracer | None = None) -> None:
+    def __init__(
+        self,
+        url: str,
+        *,
+        encoding: Encoding = "cbor",
+        name: str = "rosbridge-client",
+        connect_timeout: float = 10.0,
+        reconnect: bool = True,
+        backoff_initial: float = 0.1,
+        backoff_max: float = 2.0,
+        registry: TypeRegistry | None = None,
+        offload_bytes: int | None = None,
+        transport: TransportConfig | None = None,
+        tracer: Tracer | None = None,
+    ) -> None:
         self.url = url
         self.tracer = tracer
         self.name = name
@@ -117,9 +127,13 @@ class RosbridgeClient:
         self._latched: dict[str, dict[str, Any] | None] = {}
         self._encode_pool = ThreadPoolExecutor(1, thread_name_prefix=f"{name}-encode")
         self._decode_pool = ThreadPoolExecutor(1, thread_name_prefix=f"{name}-decode")
-        self._pump = FramePump(self._protocol, decode_pool=self._decode_pool,
-                               offload_bytes=self._offload_bytes, deliver=self._deliver,
-                               on_bad_frame=self._bad_frame)
+        self._pump = FramePump(
+            self._protocol,
+            decode_pool=self._decode_pool,
+            offload_bytes=self._offload_bytes,
+            deliver=self._deliver,
+            on_bad_frame=self._bad_frame,
+        )
         self.connections = 0
         """Successful connections so far (1 after connect, +1 per reconnect)."""
         self.bad_frames = 0
@@ -145,8 +159,9 @@ class RosbridgeClient:
             raise ClientClosed(f"{self.name} is closed")
         if self._run_task is not None and not self._run_task.done():
             return
-        ws = await open_with_retry(self.url, self._transport, self._backoff, self._rng,
-                                   timeout_s=self._connect_timeout_s)
+        ws = await open_with_retry(
+            self.url, self._transport, self._backoff, self._rng, timeout_s=self._connect_timeout_s
+        )
         await self._attach(ws)
         self._run_task = asyncio.create_task(self._run(ws), name=f"{self.name} reader")
         self._run_task.add_done_callback(self._on_run_done)
@@ -188,8 +203,15 @@ class RosbridgeClient:
         await self.close()
 
     # ------------------------------------------------------------------- topics
-    async def advertise(self, topic: str, type: str, *, latch: bool = False,
-                        queue_size: int = DEFAULT_QUEUE_SIZE, latest_only: bool = False) -> None:
+    async def advertise(
+        self,
+        topic: str,
+        type: str,
+        *,
+        latch: bool = False,
+        queue_size: int = DEFAULT_QUEUE_SIZE,
+        latest_only: bool = False,
+    ) -> None:
         """Declare that we publish ``topic`` of ``type`` (re-sent after every reconnect).
 
         latest_only : keep at most one unsent message for this topic; a newer ``publish``
@@ -233,8 +255,9 @@ class RosbridgeClient:
         """Messages this client dropped: full subscription queues, stale or unsendable
         publishes."""
         received = sum(sub.dropped for sub in self._subs.values())
-        sent = sum(p.stats.dropped_stale + p.stats.dropped_disconnected
-                   for p in self._publishers.values())
+        sent = sum(
+            p.stats.dropped_stale + p.stats.dropped_disconnected for p in self._publishers.values()
+        )
         return received + sent
 
     def publish_stats(self, topic: str) -> PublishStats:
@@ -246,10 +269,17 @@ class RosbridgeClient:
         """Wait until every latest-only topic has sent its parked message."""
         await asyncio.gather(*(p.flush() for p in list(self._publishers.values())))
 
-    async def subscribe(self, topic: str, type: str | None = None, *, throttle_rate: int = 0,
-                        queue_length: int = 0, compression: Compression | None = None,
-                        maxsize: int = DEFAULT_MAXSIZE,
-                        bytes_as_numpy: bool = False) -> Subscription:
+    async def subscribe(
+        self,
+        topic: str,
+        type: str | None = None,
+        *,
+        throttle_rate: int = 0,
+        queue_length: int = 0,
+        compression: Compression | None = None,
+        maxsize: int = DEFAULT_MAXSIZE,
+        bytes_as_numpy: bool = False,
+    ) -> Subscription:
         """Subscribe to ``topic``; returns an async iterator of :class:`clients.Received`.
 
         type : message type; when given, messages arrive in canonical form (JSON base64 ->
@@ -263,11 +293,21 @@ class RosbridgeClient:
         Works before the topic has a publisher, before ``connect()`` and while reconnecting
         (the subscription is then sent when the connection opens).
         """
-        sub_id, frame = self._protocol.subscribe(topic, type, throttle_rate_ms=throttle_rate,
-                                                 queue_length=queue_length,
-                                                 compression=compression)
-        sub = Subscription(topic=topic, sub_id=sub_id, type=type, maxsize=maxsize,
-                           bytes_as_numpy=bytes_as_numpy, unsubscribe=self._unsubscribe)
+        sub_id, frame = self._protocol.subscribe(
+            topic,
+            type,
+            throttle_rate_ms=throttle_rate,
+            queue_length=queue_length,
+            compression=compression,
+        )
+        sub = Subscription(
+            topic=topic,
+            sub_id=sub_id,
+            type=type,
+            maxsize=maxsize,
+            bytes_as_numpy=bytes_as_numpy,
+            unsubscribe=self._unsubscribe,
+        )
         self._subs[sub_id] = sub
         await self._send_control(frame)
         return sub
@@ -279,8 +319,14 @@ class RosbridgeClient:
             await self._send_control(frame)
 
     # ------------------------------------------------------------------ services
-    async def call_service(self, service: str, args: dict[str, Any] | None = None, *,
-                           type: str | None = None, timeout: float | None = 5.0) -> Any:
+    async def call_service(
+        self,
+        service: str,
+        args: dict[str, Any] | None = None,
+        *,
+        type: str | None = None,
+        timeout: float | None = 5.0,
+    ) -> Any:
         """Call a service and return its response ``values``.
 
         With ``type`` (``pkg/srv/T``) known to the registry, the values come normalized.
@@ -321,8 +367,9 @@ class RosbridgeClient:
             await self._send_control(frame)
 
     # ------------------------------------------------------------------- actions
-    async def send_action_goal(self, action: str, action_type: str,
-                               args: dict[str, Any] | None = None) -> ActionGoal:
+    async def send_action_goal(
+        self, action: str, action_type: str, args: dict[str, Any] | None = None
+    ) -> ActionGoal:
         """Send a goal to an action server; returns its :class:`ActionGoal` handle."""
         if self._ws is None:
             raise self._not_connected(f"send a goal to {action}")
@@ -364,8 +411,9 @@ class RosbridgeClient:
         publisher = self._publishers.get(topic)
         if publisher is None:
             on_sent = self.tracer.published if self.tracer is not None else None
-            publisher = TopicPublisher(topic, latest_only=False, encode=self._encode,
-                                       send=self._send, on_sent=on_sent)
+            publisher = TopicPublisher(
+                topic, latest_only=False, encode=self._encode, send=self._send, on_sent=on_sent
+            )
             self._publishers[topic] = publisher
         return publisher
 
@@ -375,8 +423,9 @@ class RosbridgeClient:
             return self._protocol.encode_publish(topic, msg)
         loop = asyncio.get_running_loop()
         try:
-            return await loop.run_in_executor(self._encode_pool, self._protocol.encode_publish,
-                                              topic, msg)
+            return await loop.run_in_executor(
+                self._encode_pool, self._protocol.encode_publish, topic, msg
+            )
         except RuntimeError as exc:
             if not self._closed:
                 raise
@@ -411,8 +460,9 @@ class RosbridgeClient:
         self.connections += 1
         frames = self._protocol.resume_frames()
         self._connected.set()
-        logger.info("%s connected to %s (%d registrations restored)", self.name, self.url,
-                    len(frames))
+        logger.info(
+            "%s connected to %s (%d registrations restored)", self.name, self.url, len(frames)
+        )
         try:
             for frame in frames:
                 await self._send(frame)
@@ -447,8 +497,9 @@ class RosbridgeClient:
                     sub.finish(lost)
                 return
             logger.warning("%s lost its connection to %s; reconnecting", self.name, self.url)
-            ws = await open_with_retry(self.url, self._transport, self._backoff, self._rng,
-                                       timeout_s=None)
+            ws = await open_with_retry(
+                self.url, self._transport, self._backoff, self._rng, timeout_s=None
+            )
             await self._attach(ws)
 
     def _on_run_done(self, task: asyncio.Task[None]) -> None:
@@ -493,4 +544,3 @@ class RosbridgeClient:
                 self._action_host.cancel(event)
             case Ignored(op=op, reason=reason):
                 logger.debug("%s ignored %s: %s", self.name, op, reason)
-

@@ -103,8 +103,14 @@ async def open_once(url: str, config: TransportConfig, timeout_s: float) -> Clie
     return ws
 
 
-async def open_with_retry(url: str, config: TransportConfig, backoff: BackoffPolicy,
-                          rng: random.Random, *, timeout_s: float | None) -> ClientConnection:
+async def open_with_retry(
+    url: str,
+    config: TransportConfig,
+    backoff: BackoffPolicy,
+    rng: random.Random,
+    *,
+    timeout_s: float | None,
+) -> ClientConnection:
     """Open a websocket, retrying with backoff until it works or ``timeout_s`` elapses.
 
     ``timeout_s=None`` retries until cancelled (used while reconnecting). Raises
@@ -118,8 +124,11 @@ async def open_with_retry(url: str, config: TransportConfig, backoff: BackoffPol
         attempt += 1
         remaining = None if deadline is None else deadline - loop.time()
         try:
-            limit = config.attempt_timeout_s if remaining is None else min(
-                config.attempt_timeout_s, max(remaining, 0.01))
+            limit = (
+                config.attempt_timeout_s
+                if remaining is None
+                else min(config.attempt_timeout_s, max(remaining, 0.01))
+            )
             return await open_once(url, config, limit)
         except InvalidURI as exc:
             raise ConnectionFailed(f"{url}: invalid websocket URL ({exc})") from exc
@@ -129,6 +138,7 @@ async def open_with_retry(url: str, config: TransportConfig, backoff: BackoffPol
         if deadline is not None and loop.time() + delay >= deadline:
             raise ConnectionFailed(
                 f"could not connect to {url} within {timeout_s} s after {attempt} attempts: "
-                f"{last_error}") from last_error
+                f"{last_error}"
+            ) from last_error
         logger.debug("connect to %s failed (%s); retrying in %.2f s", url, last_error, delay)
         await asyncio.sleep(delay)

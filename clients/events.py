@@ -101,5 +101,13 @@ class Ignored:
     reason: str
 
 
-Event = (TopicMessage | ServiceReply | ServiceRequest | ActionFeedback | ActionOutcome
-         | GoalRequest | GoalCancel | Ignored)
+Event = (
+    TopicMessage
+    | ServiceReply
+    | ServiceRequest
+    | ActionFeedback
+    | ActionOutcome
+    | GoalRequest
+    | GoalCancel
+    | Ignored
+)

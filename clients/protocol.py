@@ -126,8 +126,9 @@ class ClientProtocol:
         return "cbor" if self.encoding == "cbor" else "none"
 
     # ------------------------------------------------------------------------ topics out
-    def advertise(self, topic: str, type: str, *, latch: bool = False,
-                  queue_size: int = DEFAULT_QUEUE_SIZE) -> Frame:
+    def advertise(
+        self, topic: str, type: str, *, latch: bool = False, queue_size: int = DEFAULT_QUEUE_SIZE
+    ) -> Frame:
         """Register ``topic`` as published by us and return the ``advertise`` frame."""
         previous = self._adverts.get(topic)
         advert_id = previous.advert_id if previous else self.next_id("advertise", topic)
@@ -162,9 +163,15 @@ class ClientProtocol:
         return Frame(publish_json(topic, msg), text=True)
 
     # ------------------------------------------------------------------- subscriptions
-    def subscribe(self, topic: str, type: str | None = None, *, throttle_rate_ms: int = 0,
-                  queue_length: int = 0,
-                  compression: Compression | None = None) -> tuple[str, Frame]:
+    def subscribe(
+        self,
+        topic: str,
+        type: str | None = None,
+        *,
+        throttle_rate_ms: int = 0,
+        queue_length: int = 0,
+        compression: Compression | None = None,
+    ) -> tuple[str, Frame]:
         """Register a subscription; return its id and the ``subscribe`` frame.
 
         With ``type`` given, incoming messages are normalized to canonical form; an unknown
@@ -173,8 +180,14 @@ class ClientProtocol:
         if type is not None:
             self._spec_lookup(type)
         sub_id = self.next_id("subscribe", topic)
-        record = SubscriptionRecord(sub_id, topic, type, int(throttle_rate_ms),
-                                    int(queue_length), compression or self.default_compression())
+        record = SubscriptionRecord(
+            sub_id,
+            topic,
+            type,
+            int(throttle_rate_ms),
+            int(queue_length),
+            compression or self.default_compression(),
+        )
         frame = _subscribe_frame(record)
         self._subs[sub_id] = record
         self._reindex()
@@ -209,8 +222,14 @@ class ClientProtocol:
         self._topic_index = MappingProxyType(index)
 
     # ------------------------------------------------------------------------ services
-    def call_service(self, service: str, args: Any = None, *, type: str | None = None,
-                     timeout_s: float | None = None) -> tuple[str, Frame]:
+    def call_service(
+        self,
+        service: str,
+        args: Any = None,
+        *,
+        type: str | None = None,
+        timeout_s: float | None = None,
+    ) -> tuple[str, Frame]:
         """Start a call; return its id and the ``call_service`` frame."""
         call_id = self.next_id("call_service", service)
         optional: _CallOptions = {}
@@ -218,8 +237,13 @@ class ClientProtocol:
             optional["type"] = type
         if timeout_s is not None:
             optional["timeout"] = float(timeout_s)
-        frame = op_frame(ops.CallService, id=call_id, service=service,
-                         args={} if args is None else args, **optional)
+        frame = op_frame(
+            ops.CallService,
+            id=call_id,
+            service=service,
+            args={} if args is None else args,
+            **optional,
+        )
         self._calls[call_id] = service
         return call_id, frame
 
@@ -242,16 +266,28 @@ class ClientProtocol:
     @staticmethod
     def service_response(request: ServiceRequest, values: Any, *, result: bool) -> Frame:
         """Answer a :class:`ServiceRequest` (``values``: a dict, or the error text on failure)."""
-        return op_frame(ops.ServiceResponse, service=request.service, values=values,
-                        result=result, id=request.request_id)
+        return op_frame(
+            ops.ServiceResponse,
+            service=request.service,
+            values=values,
+            result=result,
+            id=request.request_id,
+        )
 
     # ------------------------------------------------------------------------- actions
-    def send_action_goal(self, action: str, action_type: str, args: Any = None, *,
-                         feedback: bool = True) -> tuple[str, Frame]:
+    def send_action_goal(
+        self, action: str, action_type: str, args: Any = None, *, feedback: bool = True
+    ) -> tuple[str, Frame]:
         """Send a goal; feedback and the result arrive as events keyed by the returned id."""
         goal_id = self.next_id("send_action_goal", action)
-        frame = op_frame(ops.SendActionGoal, id=goal_id, action=action, action_type=action_type,
-                         args={} if args is None else args, feedback=feedback)
+        frame = op_frame(
+            ops.SendActionGoal,
+            id=goal_id,
+            action=action,
+            action_type=action_type,
+            args={} if args is None else args,
+            feedback=feedback,
+        )
         self._goals[goal_id] = action
         return goal_id, frame
 
@@ -286,8 +322,14 @@ class ClientProtocol:
     @staticmethod
     def action_result(goal: GoalRequest, values: Any, *, status: int, result: bool) -> Frame:
         """Final answer for a goal we serve (status: action_msgs/GoalStatus)."""
-        return op_frame(ops.ActionResult, id=goal.goal_id, action=goal.action, values=values,
-                        status=status, result=result)
+        return op_frame(
+            ops.ActionResult,
+            id=goal.goal_id,
+            action=goal.action,
+            values=values,
+            status=status,
+            result=result,
+        )
 
     # ---------------------------------------------------------------------- connection
     def resume_frames(self) -> list[Frame]:
@@ -297,10 +339,12 @@ class ClientProtocol:
         services and actions, then subscriptions; all with their original ids.
         """
         frames = [_advertise_frame(r) for r in self._adverts.values()]
-        frames += [op_frame(ops.AdvertiseService, type=t, service=s)
-                   for s, t in self._services.items()]
-        frames += [op_frame(ops.AdvertiseAction, type=t, action=a)
-                   for a, t in self._actions.items()]
+        frames += [
+            op_frame(ops.AdvertiseService, type=t, service=s) for s, t in self._services.items()
+        ]
+        frames += [
+            op_frame(ops.AdvertiseAction, type=t, action=a) for a, t in self._actions.items()
+        ]
         frames += [_subscribe_frame(r) for r in self._subs.values()]
         return frames
 
@@ -338,8 +382,9 @@ class ClientProtocol:
         ``wire_bytes`` is ``len(data)``: for text frames that counts characters, equal to bytes
         for the ASCII-only JSON that rosbridge servers send.
         """
-        return self.handle(self.decode(data, recv_ns=recv_ns), recv_ns=recv_ns,
-                           wire_bytes=len(data))
+        return self.handle(
+            self.decode(data, recv_ns=recv_ns), recv_ns=recv_ns, wire_bytes=len(data)
+        )
 
     def handle(self, op: dict[str, Any], *, recv_ns: int, wire_bytes: int) -> list[Event]:
         """Route a decoded op to its destination; returns the resulting events."""
@@ -414,22 +459,30 @@ class ClientProtocol:
     _HANDLERS: Mapping[str, Callable[[ClientProtocol, dict[str, Any], int, int], list[Event]]]
 
 
-ClientProtocol._HANDLERS = MappingProxyType({
-    "publish": ClientProtocol._on_publish,
-    "service_response": ClientProtocol._on_service_response,
-    "call_service": ClientProtocol._on_call_service,
-    "action_feedback": ClientProtocol._on_action_feedback,
-    "action_result": ClientProtocol._on_action_result,
-    "send_action_goal": ClientProtocol._on_goal_request,
-    "cancel_action_goal": ClientProtocol._on_goal_cancel,
-    "fragment": ClientProtocol._on_fragment,
-    "status": ClientProtocol._on_status,
-})
+ClientProtocol._HANDLERS = MappingProxyType(
+    {
+        "publish": ClientProtocol._on_publish,
+        "service_response": ClientProtocol._on_service_response,
+        "call_service": ClientProtocol._on_call_service,
+        "action_feedback": ClientProtocol._on_action_feedback,
+        "action_result": ClientProtocol._on_action_result,
+        "send_action_goal": ClientProtocol._on_goal_request,
+        "cancel_action_goal": ClientProtocol._on_goal_cancel,
+        "fragment": ClientProtocol._on_fragment,
+        "status": ClientProtocol._on_status,
+    }
+)
 
 
 def _advertise_frame(record: AdvertiseRecord) -> Frame:
-    return op_frame(ops.Advertise, id=record.advert_id, type=record.type, topic=record.topic,
-                    latch=record.latch, queue_size=record.queue_size)
+    return op_frame(
+        ops.Advertise,
+        id=record.advert_id,
+        type=record.type,
+        topic=record.topic,
+        latch=record.latch,
+        queue_size=record.queue_size,
+    )
 
 
 class _CallOptions(TypedDict, total=False):
@@ -447,6 +500,12 @@ class _SubscribeType(TypedDict, total=False):
 
 def _subscribe_frame(record: SubscriptionRecord) -> Frame:
     typed: _SubscribeType = {} if record.type is None else {"type": record.type}
-    return op_frame(ops.Subscribe, id=record.sub_id, topic=record.topic,
-                    compression=record.compression, throttle_rate=record.throttle_rate_ms,
-                    queue_length=record.queue_length, **typed)
+    return op_frame(
+        ops.Subscribe,
+        id=record.sub_id,
+        topic=record.topic,
+        compression=record.compression,
+        throttle_rate=record.throttle_rate_ms,
+        queue_length=record.queue_length,
+        **typed,
+    )

@@ -48,8 +48,15 @@ class PublishStats:
 class TopicPublisher:
     """Serialises the messages of one topic onto the connection (event-loop thread only)."""
 
-    def __init__(self, topic: str, *, latest_only: bool, encode: Encoder, send: Sender,
-                 on_sent: SentHook | None = None) -> None:
+    def __init__(
+        self,
+        topic: str,
+        *,
+        latest_only: bool,
+        encode: Encoder,
+        send: Sender,
+        on_sent: SentHook | None = None,
+    ) -> None:
         self.topic = topic
         self.latest_only = latest_only
         self._encode = encode
@@ -90,8 +97,9 @@ class TopicPublisher:
         self._counts["sent"] += 1
         self._counts["wire_bytes"] += frame.wire_bytes
         if self._on_sent is not None:
-            self._on_sent(self.topic, msg, encode_start_ns, ready_ns, time.time_ns(),
-                          frame.wire_bytes)
+            self._on_sent(
+                self.topic, msg, encode_start_ns, ready_ns, time.time_ns(), frame.wire_bytes
+            )
 
     async def _drain(self) -> None:
         """Send whatever sits in the slot until it stays empty."""

@@ -35,9 +35,15 @@ class FramePump:
     skipped and never end the connection.
     """
 
-    def __init__(self, protocol: ClientProtocol, *, decode_pool: Executor, offload_bytes: int,
-                 deliver: Callable[[Event], None],
-                 on_bad_frame: Callable[[Exception], None]) -> None:
+    def __init__(
+        self,
+        protocol: ClientProtocol,
+        *,
+        decode_pool: Executor,
+        offload_bytes: int,
+        deliver: Callable[[Event], None],
+        on_bad_frame: Callable[[Exception], None],
+    ) -> None:
         self._protocol = protocol
         self._pool = decode_pool
         self._offload_bytes = offload_bytes
@@ -73,8 +79,9 @@ class FramePump:
         while (item := await frames.get()) is not None:
             data, recv_ns = item
             try:
-                op = await loop.run_in_executor(self._pool, _decode_call, self._protocol, data,
-                                                recv_ns)
+                op = await loop.run_in_executor(
+                    self._pool, _decode_call, self._protocol, data, recv_ns
+                )
             except ProtocolError as exc:
                 self._on_bad_frame(exc)
                 continue

@@ -20,8 +20,9 @@ logger = logging.getLogger(__name__)
 Handler = Callable[[dict[str, Any]], Awaitable[dict[str, Any] | None]]
 
 
-def normalize_service_values(registry: TypeRegistry, type: str | None,
-                             part: Literal["request", "response"], values: Any) -> Any:
+def normalize_service_values(
+    registry: TypeRegistry, type: str | None, part: Literal["request", "response"], values: Any
+) -> Any:
     """Canonical form of a request/response when ``type`` is a known service; else as is."""
     if type is None or not isinstance(values, dict) or not registry.has_service(type):
         return values
@@ -57,8 +58,7 @@ class ServiceHost:
         if entry is None:
             logger.warning("call of %s, which has no handler here", request.service)
             return
-        task = asyncio.create_task(self._answer(request, *entry),
-                                   name=f"serve {request.service}")
+        task = asyncio.create_task(self._answer(request, *entry), name=f"serve {request.service}")
         self._tasks.add(task)
         task.add_done_callback(self._tasks.discard)
 
@@ -67,16 +67,17 @@ class ServiceHost:
             args = normalize_service_values(self._registry, type, "request", request.args)
             values = await handler(args)
             frame = ClientProtocol.service_response(
-                request, {} if values is None else values, result=True)
+                request, {} if values is None else values, result=True
+            )
         except Exception as exc:
             logger.warning("handler of %s failed: %r", request.service, exc)
-            frame = ClientProtocol.service_response(request, str(exc) or repr(exc),
-                                                    result=False)
+            frame = ClientProtocol.service_response(request, str(exc) or repr(exc), result=False)
         try:
             await self._send(frame)
         except ConnectionClosed as exc:
-            logger.warning("could not answer %s (id %s): %s", request.service,
-                           request.request_id, exc)
+            logger.warning(
+                "could not answer %s (id %s): %s", request.service, request.request_id, exc
+            )
 
     async def cancel_all(self) -> None:
         """Cancel running handlers (client closing)."""

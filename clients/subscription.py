@@ -35,9 +35,16 @@ class Subscription:
     discarded because the queue was full).
     """
 
-    def __init__(self, *, topic: str, sub_id: str, type: str | None, maxsize: int,
-                 bytes_as_numpy: bool,
-                 unsubscribe: Callable[[Subscription], Awaitable[None]]) -> None:
+    def __init__(
+        self,
+        *,
+        topic: str,
+        sub_id: str,
+        type: str | None,
+        maxsize: int,
+        bytes_as_numpy: bool,
+        unsubscribe: Callable[[Subscription], Awaitable[None]],
+    ) -> None:
         if maxsize < 1:
             raise ValueError("maxsize must be at least 1")
         self.topic = topic
@@ -117,8 +124,10 @@ class Subscription:
         await self.unsubscribe()
 
     def __repr__(self) -> str:
-        return (f"Subscription({self.topic!r}, id={self.id!r}, queued={len(self._queue)}, "
-                f"received={self.received}, dropped={self.dropped})")
+        return (
+            f"Subscription({self.topic!r}, id={self.id!r}, queued={len(self._queue)}, "
+            f"received={self.received}, dropped={self.dropped})"
+        )
 
 
 def bytes_as_arrays(msg: dict[str, Any]) -> dict[str, Any]:

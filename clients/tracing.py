@@ -56,13 +56,28 @@ class Tracer:
         self._identity = this_process(process)
         self._decoded: OrderedDict[tuple[str, int], int] = OrderedDict()
 
-    def record(self, topic: str, stamp_ns: int, stage: str, start_ns: int, end_ns: int,
-               payload_bytes: int = 0, wire_bytes: int = 0) -> None:
+    def record(
+        self,
+        topic: str,
+        stamp_ns: int,
+        stage: str,
+        start_ns: int,
+        end_ns: int,
+        payload_bytes: int = 0,
+        wire_bytes: int = 0,
+    ) -> None:
         """One stage of the message ``(topic, stamp_ns)``, wall-clock ns."""
         self.spans.record(topic, stamp_ns, stage, start_ns, end_ns, payload_bytes, wire_bytes)
 
-    def published(self, topic: str, msg: dict[str, Any], encode_start_ns: int, ready_ns: int,
-                  sent_ns: int, wire_bytes: int) -> None:
+    def published(
+        self,
+        topic: str,
+        msg: dict[str, Any],
+        encode_start_ns: int,
+        ready_ns: int,
+        sent_ns: int,
+        wire_bytes: int,
+    ) -> None:
         """A publish went out: ``encode`` (start → frame ready) and ``send`` (→ send returned)."""
         counters = self.counters
         counters["messages_out"] += 1
@@ -81,8 +96,9 @@ class Tracer:
         stamp_ns = header_stamp_ns(received.msg)
         if stamp_ns is None or not is_traced(received.topic):
             return
-        self.spans.record(received.topic, stamp_ns, "decode", received.recv_ns, decoded_ns, 0,
-                          received.wire_bytes)
+        self.spans.record(
+            received.topic, stamp_ns, "decode", received.recv_ns, decoded_ns, 0, received.wire_bytes
+        )
         self._decoded[(received.topic, stamp_ns)] = decoded_ns
         if len(self._decoded) > DECODED_MEMORY:
             self._decoded.popitem(last=False)
@@ -92,8 +108,15 @@ class Tracer:
         or ``default`` if it is no longer remembered."""
         return self._decoded.pop((topic, stamp_ns), default)
 
-    def processed(self, topic: str, stamp_ns: int | None, start_ns: int, end_ns: int,
-                  queued_ns: int, steps: dict[str, tuple[int, int]] | None = None) -> None:
+    def processed(
+        self,
+        topic: str,
+        stamp_ns: int | None,
+        start_ns: int,
+        end_ns: int,
+        queued_ns: int,
+        steps: dict[str, tuple[int, int]] | None = None,
+    ) -> None:
         """A consumer processed ``(topic, stamp_ns)``: ``wait`` (decoded → start; ``queued_ns``
         if the decode time is forgotten), ``process`` (start → end) and ``process.<step>``."""
         if stamp_ns is None:
@@ -111,16 +134,24 @@ class Tracer:
 
     def stats_msg(self, now_ns: int, dropped: int) -> dict[str, Any]:
         """This process's ProcessStats now; ``dropped`` counts messages its queues dropped."""
-        return process_stats_msg(self._identity, now_ns, self._sampler.cpu_percent(),
-                                 self._sampler.rss_bytes(), {**self.counters, "dropped": dropped})
+        return process_stats_msg(
+            self._identity,
+            now_ns,
+            self._sampler.cpu_percent(),
+            self._sampler.rss_bytes(),
+            {**self.counters, "dropped": dropped},
+        )
 
 
 @contextlib.asynccontextmanager
-async def telemetry(client: RosbridgeClient, tracer: Tracer,
-                    period_s: float = PUBLISH_PERIOD_S,
-                    trace_period_s: float = TRACE_PERIOD_S,
-                    dropped: Callable[[], int] | None = None,
-                    also: Sequence[RosbridgeClient] = ()) -> AsyncIterator[None]:
+async def telemetry(
+    client: RosbridgeClient,
+    tracer: Tracer,
+    period_s: float = PUBLISH_PERIOD_S,
+    trace_period_s: float = TRACE_PERIOD_S,
+    dropped: Callable[[], int] | None = None,
+    also: Sequence[RosbridgeClient] = (),
+) -> AsyncIterator[None]:
     """Publish ``tracer``'s span batches every ``trace_period_s`` and its stats every
     ``period_s`` through ``client`` meanwhile.
 

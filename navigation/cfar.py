@@ -63,8 +63,17 @@ class CfarDetector:
             edge_factor = solve_factor(lambda a: os_pfa(a, n, edge_rank), pfa)
         else:
             edge_factor = ca_factor(pfa, n)  # one side alone is a CA over n cells
-        return cls(config.detector, config.axis, n, config.guard_cells_per_side, pfa, rank,
-                   edge_rank, factor, edge_factor)
+        return cls(
+            config.detector,
+            config.axis,
+            n,
+            config.guard_cells_per_side,
+            pfa,
+            rank,
+            edge_rank,
+            factor,
+            edge_factor,
+        )
 
     @property
     def span(self) -> int:
@@ -80,7 +89,8 @@ class CfarDetector:
                 f"cfar.training_cells_per_side = {self.n_side} and cfar.guard_cells_per_side = "
                 f"{self.n_guard} need {self.span} {what} along cfar.axis = '{self.axis}', the "
                 f"radar image has {length}: lower them (at most "
-                f"{max(0, (length - 1) // 2 - self.n_guard)} training cells per side)")
+                f"{max(0, (length - 1) // 2 - self.n_guard)} training cells per side)"
+            )
 
     def threshold(self, power: np.ndarray) -> np.ndarray:
         """Detection threshold per cell: (beams, cells) -> (beams, cells) float32, +inf where
@@ -118,8 +128,9 @@ class CfarDetector:
         out[np.isnan(out)] = np.inf
         return out.astype(np.float32)
 
-    def _os_estimates(self, rows: np.ndarray,
-                      edges: bool = True) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def _os_estimates(
+        self, rows: np.ndarray, edges: bool = True
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Order statistics: rank-th of both sides, edge_rank-th of each side alone (unless
         ``edges`` is False: wrapped rows have no ends)."""
         n, g = self.n_side, self.n_guard
@@ -159,8 +170,7 @@ def _kth_smallest(windows: np.ndarray, rank: int) -> np.ndarray:
     return np.partition(windows, rank - 1, axis=-1)[..., rank - 1]
 
 
-def ring_side_sums(power: np.ndarray, n_side: int,
-                   n_guard: int) -> tuple[np.ndarray, np.ndarray]:
+def ring_side_sums(power: np.ndarray, n_side: int, n_guard: int) -> tuple[np.ndarray, np.ndarray]:
     """Sums of the training windows of every cell along the ring of beams (axis 0, wrapping).
 
     power : (beams, cells) -> lead, lag : (beams, cells) float64. Lead covers beams

@@ -26,6 +26,16 @@ def main(argv: list[str] | None = None) -> int:
     """Parse ``argv``, run until SIGINT/SIGTERM (or ``--duration``); 0 on a clean stop, 2 on a
     bad config, 1 when the bridge cannot be reached."""
     args = build_parser().parse_args(argv)
-    return run_node(args, log, load_config, NavigationConfig, lambda config, stop: serve(
-        args.bridge, config, stop, encoding=args.encoding,
-        connect_timeout_s=args.connect_timeout))
+    return run_node(
+        args,
+        log,
+        load_config,
+        NavigationConfig,
+        lambda config, stop: serve(
+            args.bridge,
+            config,
+            stop,
+            encoding=args.encoding,
+            connect_timeout_s=args.connect_timeout,
+        ),
+    )

@@ -99,5 +99,13 @@ def process_scan(points: np.ndarray, config: LidarConfig) -> LidarResult:
     boxes = refine_boxes(xyz, labels, config.box_max_size_m, config.shrink_boxes)
     t3 = time.time_ns()
     num_clusters = int(np.unique(labels[labels >= 0]).size)
-    return LidarResult(boxes, num_clusters, index, labels, int(points.shape[0]), samples,
-                       water_z, {"filter": (t0, t1), "dbscan": (t1, t2), "boxes": (t2, t3)})
+    return LidarResult(
+        boxes,
+        num_clusters,
+        index,
+        labels,
+        int(points.shape[0]),
+        samples,
+        water_z,
+        {"filter": (t0, t1), "dbscan": (t1, t2), "boxes": (t2, t3)},
+    )

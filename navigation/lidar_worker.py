@@ -47,8 +47,9 @@ def warm_up_points() -> np.ndarray:
     20 m ahead above a flat water plane. Returns (n, 4) float32."""
     grid = np.linspace(-1.0, 1.0, 9, dtype=np.float32)
     cube = np.stack(np.meshgrid(grid + 20.0, grid, grid), axis=-1).reshape(-1, 3)
-    water = np.stack(np.meshgrid(np.linspace(5.0, 40.0, 36), np.linspace(-10.0, 10.0, 21),
-                                 [-2.0]), axis=-1).reshape(-1, 3)
+    water = np.stack(
+        np.meshgrid(np.linspace(5.0, 40.0, 36), np.linspace(-10.0, 10.0, 21), [-2.0]), axis=-1
+    ).reshape(-1, 3)
     xyz = np.concatenate([cube, water]).astype(np.float32)
     return np.column_stack([xyz, np.ones(len(xyz), np.float32)])
 
@@ -135,16 +136,16 @@ class ProcessLidarWorker:
         if self._pool is not None:
             return self._pool
         context = multiprocessing.get_context("forkserver")
-        pool = ProcessPoolExecutor(1, mp_context=context, initializer=_init_worker,
-                                   initargs=(os.getpid(),))
+        pool = ProcessPoolExecutor(
+            1, mp_context=context, initializer=_init_worker, initargs=(os.getpid(),)
+        )
         started = time.perf_counter()
         try:
             self.pid = pool.submit(_warm_up, self._config).result(START_TIMEOUT_S)
         except BaseException:
             pool.shutdown(wait=False, cancel_futures=True)
             raise
-        log.info("LIDAR worker process %d ready in %.1f s", self.pid,
-                 time.perf_counter() - started)
+        log.info("LIDAR worker process %d ready in %.1f s", self.pid, time.perf_counter() - started)
         self._pool = pool
         return pool
 

@@ -76,8 +76,7 @@ class NavigationNode:
             )
             for name in SENSOR_INPUTS
         }
-        self._handlers: dict[str, Callable[[dict[str, Any]], Handled]] = (
-            self.processors.handlers())
+        self._handlers: dict[str, Callable[[dict[str, Any]], Handled]] = self.processors.handlers()
         unhandled = SENSOR_INPUTS.keys() - self._handlers.keys()
         if unhandled:
             raise ValueError(f"no navigation handler for input topics {sorted(unhandled)}")
@@ -143,8 +142,14 @@ class NavigationNode:
                 continue
             counters.record((time.perf_counter() - start) * 1e3)
             if self._tracer is not None:
-                self._tracer.processed(sub.topic, header_stamp_ns(received.msg), start_ns,
-                                       time.time_ns(), received.recv_ns, handled.steps)
+                self._tracer.processed(
+                    sub.topic,
+                    header_stamp_ns(received.msg),
+                    start_ns,
+                    time.time_ns(),
+                    received.recv_ns,
+                    handled.steps,
+                )
             for topic, msg in handled.outputs:
                 await self._client.publish(topic, msg)
 
@@ -157,8 +162,13 @@ class NavigationNode:
                 log.exception("imu: malformed message")
                 continue
             if self._tracer is not None:
-                self._tracer.processed(received.topic, header_stamp_ns(received.msg), start_ns,
-                                       time.time_ns(), received.recv_ns)
+                self._tracer.processed(
+                    received.topic,
+                    header_stamp_ns(received.msg),
+                    start_ns,
+                    time.time_ns(),
+                    received.recv_ns,
+                )
 
     async def _publish_map(self) -> None:
         for topic, msg in self.processors.obstacle_map():
@@ -185,12 +195,18 @@ async def _every(period_s: float, action: Callable[[], Awaitable[None]]) -> None
 
 
 async def serve(
-    url: str, config: NavigationConfig, stop: asyncio.Event, *, encoding: Encoding = "cbor",
+    url: str,
+    config: NavigationConfig,
+    stop: asyncio.Event,
+    *,
+    encoding: Encoding = "cbor",
     connect_timeout_s: float = 10.0,
 ) -> None:
     """Connect to the bridge at ``url`` and run the navigation node until ``stop``."""
-    async with node_links(url, "navigation", encoding=encoding,
-                          connect_timeout_s=connect_timeout_s) as links:
+    async with node_links(
+        url, "navigation", encoding=encoding, connect_timeout_s=connect_timeout_s
+    ) as links:
         log.info("navigation connected to %s (%s, bulk and realtime connections)", url, encoding)
-        await NavigationNode(links.bulk, config, tracer=links.tracer,
-                             realtime=links.realtime).run(stop)
+        await NavigationNode(links.bulk, config, tracer=links.tracer, realtime=links.realtime).run(
+            stop
+        )

@@ -108,10 +108,13 @@ class Processors:
         self.latest.set_boxes(result.boxes, stamp_ns)
         method = self.config.lidar.method
         boxes = box_array_msg(result.boxes, stamp_ns, frame_id, method, result.num_clusters)
-        return Handled([
-            (TOPIC_BOXES, boxes),
-            (TOPIC_MARKERS, marker_array_msg(result.boxes, stamp_ns, frame_id)),
-        ], result.steps)
+        return Handled(
+            [
+                (TOPIC_BOXES, boxes),
+                (TOPIC_MARKERS, marker_array_msg(result.boxes, stamp_ns, frame_id)),
+            ],
+            result.steps,
+        )
 
     def radar(self, msg: dict[str, Any]) -> Handled:
         """RadarImage -> RadarDetectionArray (thesis 3.5.3, SOCA-CFAR by default): detected
@@ -126,11 +129,13 @@ class Processors:
         found, targets = detect(power, PolarGeometry.of(msg), detector)
         stamp_ns = stamp_ns_of(msg["header"])
         in_target = found.target >= 0
-        self.latest.set_radar(np.column_stack([found.x_m[in_target], found.y_m[in_target]]),
-                              stamp_ns)
+        self.latest.set_radar(
+            np.column_stack([found.x_m[in_target], found.y_m[in_target]]), stamp_ns
+        )
         frame_id = msg["header"]["frame_id"]
-        return Handled([(TOPIC_RADAR,
-                         detection_array_msg(found, targets, stamp_ns, frame_id, detector))])
+        return Handled(
+            [(TOPIC_RADAR, detection_array_msg(found, targets, stamp_ns, frame_id, detector))]
+        )
 
     def camera(self, msg: dict[str, Any]) -> Handled:
         """CompressedImage -> ImageLineArray (thesis table 4.6)."""
@@ -145,4 +150,3 @@ class Processors:
         boxes, radar_xy_m, stamp_ns = self.latest.snapshot()
         grid = obstacle_grid(boxes, radar_xy_m, self.config.fusion)
         return [(TOPIC_MAP, occupancy_grid_msg(grid, stamp_ns, self.config.fusion))]
-

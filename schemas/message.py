@@ -210,8 +210,9 @@ def _float_array(field: FieldSpec, array: np.ndarray, dtype: np.dtype) -> np.nda
     return array.astype(dtype)
 
 
-def _list_to_array(field: FieldSpec, items: list[Any] | tuple[Any, ...],
-                   dtype: np.dtype[Any]) -> np.ndarray:
+def _list_to_array(
+    field: FieldSpec, items: list[Any] | tuple[Any, ...], dtype: np.dtype[Any]
+) -> np.ndarray:
     """A JSON list -> ndarray of ``dtype`` with the scalar rules (no float for int, no bool)."""
     if not items:
         return np.empty(0, dtype=dtype)

@@ -312,7 +312,6 @@ OpModel = (
 Op = Annotated[OpModel, Field(discriminator="op")]
 
 
-
 def op_name(model: type[OpBase]) -> str:
     """The literal ``op`` of a model class (``Publish`` -> ``"publish"``)."""
     name = model.model_fields["op"].default
@@ -389,8 +388,9 @@ def validate_op(model: type[OpT], obj: Mapping[str, JsonValue]) -> OpT:
     except ValidationError as exc:
         op = op_name(model)
         errors = exc.errors(include_url=False)
-        raise OpError(_describe_error(op, errors[0], len(errors) - 1), op=op,
-                      id=obj.get("id")) from None
+        raise OpError(
+            _describe_error(op, errors[0], len(errors) - 1), op=op, id=obj.get("id")
+        ) from None
 
 
 class PublishFields(NamedTuple):
@@ -416,12 +416,18 @@ def parse_publish(obj: Mapping[str, JsonValue]) -> PublishFields:
     topic, msg, op_id = obj.get("topic"), obj.get("msg", _ABSENT), obj.get("id")
     latch, queue_size = obj.get("latch", False), obj.get("queue_size", 100)
     type_name = obj.get("type")
-    if (type(topic) is str and len(topic) <= MAX_NAME_CHARS
-            and (latch is False or latch is True) and type(queue_size) is int
-            and (type_name is None or (type(type_name) is str
-                                       and len(type_name) <= MAX_NAME_CHARS))
-            and (op_id is None or isinstance(op_id, bool | int | float)
-                 or (type(op_id) is str and len(op_id) <= MAX_ID_CHARS))):
+    if (
+        type(topic) is str
+        and len(topic) <= MAX_NAME_CHARS
+        and (latch is False or latch is True)
+        and type(queue_size) is int
+        and (type_name is None or (type(type_name) is str and len(type_name) <= MAX_NAME_CHARS))
+        and (
+            op_id is None
+            or isinstance(op_id, bool | int | float)
+            or (type(op_id) is str and len(op_id) <= MAX_ID_CHARS)
+        )
+    ):
         if type(msg) is dict:
             return PublishFields(topic, msg, op_id, latch, queue_size, type_name)
         if msg is None or msg is _ABSENT:

@@ -26,8 +26,14 @@ class PointCloudLayoutError(ValueError):
     """The cloud does not carry the requested fields as consecutive little-endian float32."""
 
 
-def pack_points(points: np.ndarray, stamp_ns: int, frame_id: str, fields: Sequence[str] = XYZI, *,
-         is_dense: bool = True) -> dict[str, Any]:
+def pack_points(
+    points: np.ndarray,
+    stamp_ns: int,
+    frame_id: str,
+    fields: Sequence[str] = XYZI,
+    *,
+    is_dense: bool = True,
+) -> dict[str, Any]:
     """Canonical PointCloud2 of the first ``len(fields)`` columns of ``points``.
 
     points : (n, >= len(fields)) float32 (other dtypes are converted), any strides; the
@@ -37,16 +43,19 @@ def pack_points(points: np.ndarray, stamp_ns: int, frame_id: str, fields: Sequen
     points = np.asarray(points)
     width = len(fields)
     if points.ndim != 2 or points.shape[1] < width:
-        raise ValueError(f"points must be (n, >= {width}) for fields {tuple(fields)}, "
-                         f"got {points.shape}")
+        raise ValueError(
+            f"points must be (n, >= {width}) for fields {tuple(fields)}, got {points.shape}"
+        )
     data = np.ascontiguousarray(points[:, :width], dtype="<f4")
     step, count = 4 * width, points.shape[0]
     return {
         "header": {"stamp": ns_to_stamp(stamp_ns), "frame_id": frame_id},
         "height": 1,
         "width": count,
-        "fields": [{"name": name, "offset": 4 * k, "datatype": FLOAT32, "count": 1}
-                   for k, name in enumerate(fields)],
+        "fields": [
+            {"name": name, "offset": 4 * k, "datatype": FLOAT32, "count": 1}
+            for k, name in enumerate(fields)
+        ],
         "is_bigendian": False,
         "point_step": step,
         "row_step": step * count,
@@ -77,6 +86,10 @@ def view_points(msg: Mapping[str, Any], fields: Sequence[str] = XYZI) -> np.ndar
     data = msg["data"]
     if count * step > len(data):
         raise PointCloudLayoutError(f"data holds {len(data)} B, need {count * step} B")
-    return np.ndarray(shape=(count, len(fields)), dtype="<f4",
-                      buffer=np.frombuffer(data, dtype=np.uint8), offset=offset,
-                      strides=(step, 4))
+    return np.ndarray(
+        shape=(count, len(fields)),
+        dtype="<f4",
+        buffer=np.frombuffer(data, dtype=np.uint8),
+        offset=offset,
+        strides=(step, 4),
+    )

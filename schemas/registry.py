@@ -280,8 +280,9 @@ def _primitive_category(base: str, array: str | None) -> str:
     return specs.BOOL_ARRAY if base == "bool" else specs.STRING_ARRAY
 
 
-def _primitive_default(base: str, array: ArrayKind, length: int, category: str,
-                       dtype: np.dtype[Any] | None) -> object:
+def _primitive_default(
+    base: str, array: ArrayKind, length: int, category: str, dtype: np.dtype[Any] | None
+) -> object:
     if array is None:
         return primitives.scalar_default(base)
     fixed_length = length if array == "fixed" else 0

@@ -29,8 +29,9 @@ def read_secret(path: Path) -> str:
     return secret
 
 
-def mac(secret: str, client: str, dest: str, rand: str, t_secs: int, level: str,
-        end_secs: int) -> str:
+def mac(
+    secret: str, client: str, dest: str, rand: str, t_secs: int, level: str, end_secs: int
+) -> str:
     """rosauth's MAC: hex SHA-512 of the concatenated fields."""
     text = f"{secret}{client}{dest}{rand}{t_secs}{level}{end_secs}"
     return hashlib.sha512(text.encode("utf-8")).hexdigest()
@@ -45,14 +46,19 @@ def seconds(value: Any) -> float | None:
     if isinstance(value, dict):
         secs = value.get("secs", value.get("sec", 0))
         nsecs = value.get("nsecs", value.get("nanosec", 0))
-        if (isinstance(secs, int) and isinstance(nsecs, int)
-                and not isinstance(secs, bool) and not isinstance(nsecs, bool)):
+        if (
+            isinstance(secs, int)
+            and isinstance(nsecs, int)
+            and not isinstance(secs, bool)
+            and not isinstance(nsecs, bool)
+        ):
             return secs + nsecs / 1e9
     return None
 
 
-def check(secret: str, op: dict[str, Any], now_s: float,
-          window_s: float = TIME_WINDOW_S) -> str | None:
+def check(
+    secret: str, op: dict[str, Any], now_s: float, window_s: float = TIME_WINDOW_S
+) -> str | None:
     """None if `op` (an `auth` op's fields) authenticates at `now_s`; else why not."""
     fields = [op.get(k) for k in ("mac", "client", "dest", "rand", "level")]
     strings = [f for f in fields if isinstance(f, str)]
@@ -72,11 +78,25 @@ def check(secret: str, op: dict[str, Any], now_s: float,
     return None
 
 
-def auth_op(secret: str, now_s: float, *, client: str = "riverbridge", dest: str = "bridge",
-            level: str = "user", lifetime_s: float = 24 * 3600.0) -> dict[str, Any]:
+def auth_op(
+    secret: str,
+    now_s: float,
+    *,
+    client: str = "riverbridge",
+    dest: str = "bridge",
+    level: str = "user",
+    lifetime_s: float = 24 * 3600.0,
+) -> dict[str, Any]:
     """A signed `auth` op for a client that holds the secret (t now, end `lifetime_s` on)."""
     rand = secrets.token_hex(16)
     t_secs, end_secs = math.floor(now_s), math.floor(now_s + lifetime_s)
-    return {"op": "auth", "mac": mac(secret, client, dest, rand, t_secs, level, end_secs),
-            "client": client, "dest": dest, "rand": rand, "t": t_secs, "level": level,
-            "end": end_secs}
+    return {
+        "op": "auth",
+        "mac": mac(secret, client, dest, rand, t_secs, level, end_secs),
+        "client": client,
+        "dest": dest,
+        "rand": rand,
+        "t": t_secs,
+        "level": level,
+        "end": end_secs,
+    }

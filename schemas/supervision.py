@@ -31,17 +31,28 @@ class ComponentRestarts:
 def restarts_msg(components: Mapping[str, ComponentRestarts], stamp_ns: int) -> dict[str, Any]:
     """The DiagnosticArray for `components` (component name -> its restarts)."""
     sec, nanosec = divmod(stamp_ns, 1_000_000_000)
-    return {"header": {"stamp": {"sec": sec, "nanosec": nanosec}, "frame_id": ""},
-            "status": [_status(name, state) for name, state in components.items()]}
+    return {
+        "header": {"stamp": {"sec": sec, "nanosec": nanosec}, "frame_id": ""},
+        "status": [_status(name, state) for name, state in components.items()],
+    }
 
 
 def _status(name: str, state: ComponentRestarts) -> dict[str, Any]:
-    message = (f"restarted {state.restarts} times; last exit: {state.last_exit}"
-               if state.restarts else "running since start")
-    return {"level": WARN if state.restarts else OK, "name": NAME_PREFIX + name,
-            "message": message, "hardware_id": "",
-            "values": [{"key": "restarts", "value": str(state.restarts)},
-                       {"key": "pid", "value": str(state.pid)}]}
+    message = (
+        f"restarted {state.restarts} times; last exit: {state.last_exit}"
+        if state.restarts
+        else "running since start"
+    )
+    return {
+        "level": WARN if state.restarts else OK,
+        "name": NAME_PREFIX + name,
+        "message": message,
+        "hardware_id": "",
+        "values": [
+            {"key": "restarts", "value": str(state.restarts)},
+            {"key": "pid", "value": str(state.pid)},
+        ],
+    }
 
 
 def restart_counts(msg: Mapping[str, Any]) -> dict[str, int]:

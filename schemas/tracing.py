@@ -30,8 +30,16 @@ NS_PER_S = 1_000_000_000
 
 # (topic, stamp_ns, stage, peer, start_ns, end_ns, payload_bytes, wire_bytes)
 Span = tuple[str, int, str, str, int, int, int, int]
-SPAN_FIELDS = ("topic", "stamp_ns", "stage", "peer", "start_ns", "end_ns", "payload_bytes",
-               "wire_bytes")
+SPAN_FIELDS = (
+    "topic",
+    "stamp_ns",
+    "stage",
+    "peer",
+    "start_ns",
+    "end_ns",
+    "payload_bytes",
+    "wire_bytes",
+)
 
 
 def is_traced(topic: str) -> bool:
@@ -61,8 +69,17 @@ class SpanBuffer:
     def __len__(self) -> int:
         return len(self._spans)
 
-    def record(self, topic: str, stamp_ns: int, stage: str, start_ns: int, end_ns: int,
-               payload_bytes: int = 0, wire_bytes: int = 0, peer: str = "") -> None:
+    def record(
+        self,
+        topic: str,
+        stamp_ns: int,
+        stage: str,
+        start_ns: int,
+        end_ns: int,
+        payload_bytes: int = 0,
+        wire_bytes: int = 0,
+        peer: str = "",
+    ) -> None:
         spans = self._spans
         if len(spans) == spans.maxlen:
             self.discarded += 1
@@ -87,22 +104,40 @@ class ProcessIdentity:
 def span_array_msg(who: ProcessIdentity, spans: list[Span]) -> dict[str, Any]:
     """`riverbridge_msgs/msg/TraceSpanArray` (canonical form) of `spans` recorded by `who`."""
     process = who.process
-    return {"host": who.host, "spans": [
-        {"topic": topic, "stamp_ns": stamp_ns, "stage": stage, "process": process, "peer": peer,
-         "start_ns": start_ns, "end_ns": end_ns, "payload_bytes": payload_bytes,
-         "wire_bytes": wire_bytes}
-        for topic, stamp_ns, stage, peer, start_ns, end_ns, payload_bytes, wire_bytes in spans]}
+    return {
+        "host": who.host,
+        "spans": [
+            {
+                "topic": topic,
+                "stamp_ns": stamp_ns,
+                "stage": stage,
+                "process": process,
+                "peer": peer,
+                "start_ns": start_ns,
+                "end_ns": end_ns,
+                "payload_bytes": payload_bytes,
+                "wire_bytes": wire_bytes,
+            }
+            for topic, stamp_ns, stage, peer, start_ns, end_ns, payload_bytes, wire_bytes in spans
+        ],
+    }
 
 
-def process_stats_msg(who: ProcessIdentity, now_ns: int, cpu_percent: float, rss_bytes: int,
-                      counters: dict[str, int]) -> dict[str, Any]:
+def process_stats_msg(
+    who: ProcessIdentity, now_ns: int, cpu_percent: float, rss_bytes: int, counters: dict[str, int]
+) -> dict[str, Any]:
     """`riverbridge_msgs/msg/ProcessStats` (canonical form); `counters` names its uint64s."""
     sec, nanosec = divmod(now_ns, NS_PER_S)
-    return {"header": {"stamp": {"sec": sec, "nanosec": nanosec}, "frame_id": ""},
-            "process": who.process, "pid": who.pid, "host": who.host,
-            "cpu_percent": float(cpu_percent), "rss_bytes": int(rss_bytes),
-            "messages_out": counters.get("messages_out", 0),
-            "messages_in": counters.get("messages_in", 0),
-            "bytes_out": counters.get("bytes_out", 0), "bytes_in": counters.get("bytes_in", 0),
-            "dropped": counters.get("dropped", 0)}
-
+    return {
+        "header": {"stamp": {"sec": sec, "nanosec": nanosec}, "frame_id": ""},
+        "process": who.process,
+        "pid": who.pid,
+        "host": who.host,
+        "cpu_percent": float(cpu_percent),
+        "rss_bytes": int(rss_bytes),
+        "messages_out": counters.get("messages_out", 0),
+        "messages_in": counters.get("messages_in", 0),
+        "bytes_out": counters.get("bytes_out", 0),
+        "bytes_in": counters.get("bytes_in", 0),
+        "dropped": counters.get("dropped", 0),
+    }

@@ -81,12 +81,23 @@ class Camera:
         fill_origins(self._origins, origin)
         image = np.empty((cfg.height_px * cfg.width_px, 3), np.uint8)
         lit = self._lit_colours(scene)
-        self._caster.map_chunks(scene, self._origins, self._directions_map, cfg.max_range_m,
-                                partial(self._shade_chunk, lit, image))
+        self._caster.map_chunks(
+            scene,
+            self._origins,
+            self._directions_map,
+            cfg.max_range_m,
+            partial(self._shade_chunk, lit, image),
+        )
         return image.reshape(cfg.height_px, cfg.width_px, 3)
 
-    def _shade_chunk(self, lit_bgr: np.ndarray, image: np.ndarray, chunk: slice,
-                     range_m: np.ndarray, prim: np.ndarray) -> None:
+    def _shade_chunk(
+        self,
+        lit_bgr: np.ndarray,
+        image: np.ndarray,
+        chunk: slice,
+        range_m: np.ndarray,
+        prim: np.ndarray,
+    ) -> None:
         """Shade one chunk of pixels into `image[chunk]` (runs on a ray-casting thread):
         the sky everywhere, then material colour hazed by range where a triangle was hit."""
         bgr = self._bgr[chunk]

@@ -26,5 +26,12 @@ def main(argv: list[str] | None = None) -> int:
     """Parse `argv` and run until SIGINT/SIGTERM (or `--duration`); 0 on a clean stop, 2 on a
     bad config, 1 when the bridge cannot be reached."""
     args = build_parser().parse_args(argv)
-    return run_node(args, log, load_config, SimConfig, lambda cfg, stop: serve(
-        args.bridge, cfg, stop, encoding=args.encoding, connect_timeout_s=args.connect_timeout))
+    return run_node(
+        args,
+        log,
+        load_config,
+        SimConfig,
+        lambda cfg, stop: serve(
+            args.bridge, cfg, stop, encoding=args.encoding, connect_timeout_s=args.connect_timeout
+        ),
+    )

@@ -88,7 +88,8 @@ class VesselDynamics:
         outline = np.array([[hx, 0], [hx, hy], [hx, -hy], [0, hy], [0, -hy], [-hx, hy], [-hx, -hy]])
         heights = np.array([-c.draft_m / 2, 0.5])
         self._probes_body = np.column_stack(
-            [np.tile(outline, (len(heights), 1)), np.repeat(heights, len(outline))])
+            [np.tile(outline, (len(heights), 1)), np.repeat(heights, len(outline))]
+        )
 
     def derivatives(self, state: np.ndarray, command: Command) -> np.ndarray:
         """d/dt of (x, y, psi, u, v, r) — eq. 2.1.1 and 2.1.2 with current and wind.
@@ -106,12 +107,20 @@ class VesselDynamics:
         tau_wu, tau_wv = self._wind_force(psi, u, v)
         tau_u = np.clip(command.surge_force_n, -c.max_surge_force_n, c.max_surge_force_n)
         tau_r = np.clip(command.yaw_moment_nm, -c.max_yaw_moment_nm, c.max_yaw_moment_nm)
-        dur = (c.m22_kg * vr * r - c.d_u * ur - c.d_u2 * abs(ur) * ur - c.d_u3 * ur**3
-               + tau_u + tau_wu) / c.m11_kg
-        dvr = (-c.m11_kg * ur * r - c.d_v * vr - c.d_v2 * abs(vr) * vr - c.d_v3 * vr**3
-               + tau_wv) / c.m22_kg
-        dr = ((c.m11_kg - c.m22_kg) * ur * vr - c.d_r * r - c.d_r2 * abs(r) * r - c.d_r3 * r**3
-              + tau_r + c.wind_yaw_arm_m * tau_wv) / c.m33_kgm2
+        dur = (
+            c.m22_kg * vr * r - c.d_u * ur - c.d_u2 * abs(ur) * ur - c.d_u3 * ur**3 + tau_u + tau_wu
+        ) / c.m11_kg
+        dvr = (
+            -c.m11_kg * ur * r - c.d_v * vr - c.d_v2 * abs(vr) * vr - c.d_v3 * vr**3 + tau_wv
+        ) / c.m22_kg
+        dr = (
+            (c.m11_kg - c.m22_kg) * ur * vr
+            - c.d_r * r
+            - c.d_r2 * abs(r) * r
+            - c.d_r3 * r**3
+            + tau_r
+            + c.wind_yaw_arm_m * tau_wv
+        ) / c.m33_kgm2
         return np.array([u * cos - v * sin, u * sin + v * cos, r, dur + r * vc, dvr - r * uc, dr])
 
     def _wind_force(self, psi: float, u: float, v: float) -> tuple[float, float]:
@@ -158,6 +167,9 @@ class VesselDynamics:
         reach = distance + self.cfg.collision_clearance_m
         dists = np.full(len(origins), reach, np.float32)
         hit = self.scene.embree.run(
-            origins.astype(np.float32), np.tile(direction, (len(origins), 1)).astype(np.float32),
-            dists=dists, query="DISTANCE")
+            origins.astype(np.float32),
+            np.tile(direction, (len(origins), 1)).astype(np.float32),
+            dists=dists,
+            query="DISTANCE",
+        )
         return bool((hit < reach).any())

@@ -68,8 +68,12 @@ def quaternion_from_matrix(rotation: np.ndarray) -> tuple[float, float, float, f
     k = int(np.argmax(candidates))
     if k == 0:
         w = 0.5 * np.sqrt(1.0 + trace)
-        q = ((m[2, 1] - m[1, 2]) / (4 * w), (m[0, 2] - m[2, 0]) / (4 * w),
-             (m[1, 0] - m[0, 1]) / (4 * w), w)
+        q = (
+            (m[2, 1] - m[1, 2]) / (4 * w),
+            (m[0, 2] - m[2, 0]) / (4 * w),
+            (m[1, 0] - m[0, 1]) / (4 * w),
+            w,
+        )
     else:
         i, j, h = k - 1, k % 3, (k + 1) % 3
         v = np.zeros(3)

@@ -33,11 +33,13 @@ class Gnss:
         """(latitude deg, longitude deg, altitude m) of the antenna, with configured noise."""
         cfg = self.cfg
         antenna, _ = sensor_pose_in_map(pose, cfg.mount, water_level_m)
-        noise = self._rng.normal(0.0, [cfg.horizontal_noise_std_m, cfg.horizontal_noise_std_m,
-                                       cfg.vertical_noise_std_m])
+        noise = self._rng.normal(
+            0.0, [cfg.horizontal_noise_std_m, cfg.horizontal_noise_std_m, cfg.vertical_noise_std_m]
+        )
         x_m, y_m, z_m = antenna + noise
-        lat, lon = utm_to_latlon(cfg.origin_easting_m + x_m, cfg.origin_northing_m + y_m,
-                                 cfg.utm_zone)
+        lat, lon = utm_to_latlon(
+            cfg.origin_easting_m + x_m, cfg.origin_northing_m + y_m, cfg.utm_zone
+        )
         return float(lat), float(lon), float(cfg.water_level_altitude_m + z_m - water_level_m)
 
     def message(self, fix: tuple[float, float, float], stamp_ns: int) -> Message:

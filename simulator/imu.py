@@ -69,7 +69,8 @@ class Imu:
             "angular_velocity_covariance": diagonal_covariance([cfg.gyro_noise_std_radps**2] * 3),
             "linear_acceleration": vector3(reading.linear_acceleration_mps2),
             "linear_acceleration_covariance": diagonal_covariance(
-                [cfg.accel_noise_std_mps2**2] * 3),
+                [cfg.accel_noise_std_mps2**2] * 3
+            ),
         }
 
 

@@ -42,10 +42,12 @@ def lidar_directions(cfg: LidarConfig) -> np.ndarray:
     """
     cols = round(cfg.horizontal_fov_deg / cfg.horizontal_resolution_deg)
     rows = round(cfg.vertical_fov_deg / cfg.vertical_resolution_deg)
-    azimuth = np.radians(-cfg.horizontal_fov_deg / 2 + (np.arange(cols) + 0.5)
-                         * cfg.horizontal_resolution_deg)
-    elevation = np.radians(-cfg.vertical_fov_deg / 2 + (np.arange(rows) + 0.5)
-                           * cfg.vertical_resolution_deg)
+    azimuth = np.radians(
+        -cfg.horizontal_fov_deg / 2 + (np.arange(cols) + 0.5) * cfg.horizontal_resolution_deg
+    )
+    elevation = np.radians(
+        -cfg.vertical_fov_deg / 2 + (np.arange(rows) + 0.5) * cfg.vertical_resolution_deg
+    )
     el, az = np.meshgrid(elevation, azimuth, indexing="ij")
     directions = np.stack([np.cos(el) * np.cos(az), np.cos(el) * np.sin(az), np.sin(el)], axis=-1)
     return np.ascontiguousarray(directions.reshape(-1, 3), dtype=np.float32)
@@ -93,9 +95,13 @@ class Lidar:
         origin, rotation = sensor_pose_in_map(pose, self.cfg.mount, scene.water_level_m)
         rotate_rows(self.directions_sensor, rotation, self._directions_map)
         fill_origins(self._origins, origin)
-        chunks = self._caster.map_chunks(scene, self._origins, self._directions_map,
-                                         self.cfg.range_max_m,
-                                         partial(self._points, scene, with_sources))
+        chunks = self._caster.map_chunks(
+            scene,
+            self._origins,
+            self._directions_map,
+            self.cfg.range_max_m,
+            partial(self._points, scene, with_sources),
+        )
         if len(chunks) > 1:
             points = np.concatenate([c.points for c in chunks])
             source = np.concatenate([c.source for c in chunks])
@@ -107,8 +113,9 @@ class Lidar:
             points[:, :3] *= ((range_m + noise_m) / range_m)[:, None]
         return LidarScan(points, source)
 
-    def _points(self, scene: Scene, with_sources: bool, chunk: slice, range_m: np.ndarray,
-                prim: np.ndarray) -> LidarScan:
+    def _points(
+        self, scene: Scene, with_sources: bool, chunk: slice, range_m: np.ndarray, prim: np.ndarray
+    ) -> LidarScan:
         """The returning rays of one chunk (runs on a worker thread); sources only if asked."""
         hit = np.flatnonzero(prim >= 0)
         faces = np.take(prim, hit)
@@ -122,12 +129,12 @@ class Lidar:
         directions = np.take(self.directions_sensor[chunk], hit, axis=0)
         np.multiply(directions, ranges[:, None], out=points[:, :3])
         points[:, 3] = intensity
-        source = (np.take(scene.face_source, faces[keep]) if with_sources
-                  else np.empty(0, np.int32))
+        source = np.take(scene.face_source, faces[keep]) if with_sources else np.empty(0, np.int32)
         return LidarScan(points, source)
 
-    def _water_returns(self, scene: Scene, chunk: slice, hit: np.ndarray,
-                       faces: np.ndarray) -> np.ndarray:
+    def _water_returns(
+        self, scene: Scene, chunk: slice, hit: np.ndarray, faces: np.ndarray
+    ) -> np.ndarray:
         """Specular water: (k,) bool, False for water hits further than the maximum incidence
         from the surface normal (the beam is mirrored away), True for everything else."""
         water = np.flatnonzero(np.take(scene.face_source, faces) == WATER)
@@ -163,8 +170,9 @@ class LidarSensor:
             return Generated(self.lidar.message(self.lidar.scan(self._scene, pose), stamp_ns))
         scan = self.lidar.scan_with_sources(self._scene, pose)
         truth = lidar_truth(self._scene, self._cfg.lidar, pose, scan.source, stamp_ns)
-        return Generated(self.lidar.message(scan.points, stamp_ns),
-                         ((TOPICS["lidar_truth"].name, truth),))
+        return Generated(
+            self.lidar.message(scan.points, stamp_ns), ((TOPICS["lidar_truth"].name, truth),)
+        )
 
     def close(self) -> None:
         self.lidar.close()

@@ -50,8 +50,9 @@ def compressed_image(jpeg: bytes, stamp_ns: int, frame_id: str) -> Message:
     return {"header": header(stamp_ns, frame_id), "format": "jpeg", "data": bytes(jpeg)}
 
 
-def transform_stamped(stamp_ns: int, parent: str, child: str, translation: Floats,
-                      rotation_xyzw: Floats) -> Message:
+def transform_stamped(
+    stamp_ns: int, parent: str, child: str, translation: Floats, rotation_xyzw: Floats
+) -> Message:
     """geometry_msgs/msg/TransformStamped from `parent` to `child`."""
     return {
         "header": header(stamp_ns, parent),
@@ -68,8 +69,13 @@ def tf_message(transforms: list[Message]) -> Message:
 def vessel_tf(pose: Pose2D, water_level_m: float, stamp_ns: int) -> Message:
     """TFMessage map -> base_link for the vessel at `pose`."""
     translation = (pose.x_m, pose.y_m, water_level_m)
-    return tf_message([transform_stamped(stamp_ns, MAP_FRAME, BASE_FRAME, translation,
-                                         quaternion_from_yaw(pose.yaw_rad))])
+    return tf_message(
+        [
+            transform_stamped(
+                stamp_ns, MAP_FRAME, BASE_FRAME, translation, quaternion_from_yaw(pose.yaw_rad)
+            )
+        ]
+    )
 
 
 def odometry(

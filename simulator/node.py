@@ -64,8 +64,10 @@ class GenerationTimes:
     def summary(self) -> str:
         if not self.times_ms:
             return f"n={self.count} skipped={self.skipped}"
-        return (f"n={self.count} median={statistics.median(self.times_ms):.1f} ms "
-                f"max={max(self.times_ms):.1f} ms skipped={self.skipped}")
+        return (
+            f"n={self.count} median={statistics.median(self.times_ms):.1f} ms "
+            f"max={max(self.times_ms):.1f} ms skipped={self.skipped}"
+        )
 
 
 class SimulatorNode:
@@ -81,11 +83,17 @@ class SimulatorNode:
     sensors : what to run; by default simulator.sensors.SENSORS built for `cfg` and `scene`.
     """
 
-    def __init__(self, client: RosbridgeClient, cfg: SimConfig, scene: Scene, *,
-                 realtime: RosbridgeClient | None = None,
-                 clock_ns: Callable[[], int] = time.time_ns,
-                 tracer: Tracer | None = None,
-                 sensors: Sequence[Sensor] | None = None) -> None:
+    def __init__(
+        self,
+        client: RosbridgeClient,
+        cfg: SimConfig,
+        scene: Scene,
+        *,
+        realtime: RosbridgeClient | None = None,
+        clock_ns: Callable[[], int] = time.time_ns,
+        tracer: Tracer | None = None,
+        sensors: Sequence[Sensor] | None = None,
+    ) -> None:
         self._client = client
         self._realtime = realtime or client
         self._tracer = tracer
@@ -103,9 +111,12 @@ class SimulatorNode:
         self.timings = {key: GenerationTimes() for key in (*keys, "physics")}
         self.physics_lateness = GenerationTimes()  # ms each physics tick started behind schedule
         self._truth_tasks: set[asyncio.Task[None]] = set()
-        self._executors = {key: ThreadPoolExecutor(1, thread_name_prefix=f"sim-{key}",
-                                                   initializer=background_priority)
-                           for key in keys}
+        self._executors = {
+            key: ThreadPoolExecutor(
+                1, thread_name_prefix=f"sim-{key}", initializer=background_priority
+            )
+            for key in keys
+        }
 
     @property
     def state(self) -> VesselState:
@@ -123,11 +134,21 @@ class SimulatorNode:
         tasks = [asyncio.create_task(self._physics()), asyncio.create_task(self._follow(commands))]
         # Stagger the worker sensors over their period so their ray casts rarely overlap.
         for k, sensor in enumerate(self._workers):
-            tasks.append(asyncio.create_task(_every(
-                1.0 / self.rate_hz(sensor), self._worker_tick(sensor),
-                self.timings[sensor.topic.key], phase=k / len(self._workers))))
-        tasks += [asyncio.create_task(_every(1.0 / self.rate_hz(sensor), self._timer_tick(sensor)))
-                  for sensor in self.sensors if sensor.schedule == "timer"]
+            tasks.append(
+                asyncio.create_task(
+                    _every(
+                        1.0 / self.rate_hz(sensor),
+                        self._worker_tick(sensor),
+                        self.timings[sensor.topic.key],
+                        phase=k / len(self._workers),
+                    )
+                )
+            )
+        tasks += [
+            asyncio.create_task(_every(1.0 / self.rate_hz(sensor), self._timer_tick(sensor)))
+            for sensor in self.sensors
+            if sensor.schedule == "timer"
+        ]
         tasks.append(asyncio.create_task(_every(STATS_PERIOD_S, self._log_timings)))
         try:
             await stop.wait()
@@ -155,8 +176,9 @@ class SimulatorNode:
             for topic in published_by("simulator", "truth"):
                 if not topic.latched:
                     await self._client.advertise(*topic.pair, latest_only=True)
-            await self._publish_latched(TOPICS["ground_truth"],
-                                        markers_msg(self.scene.objects, now_ns))
+            await self._publish_latched(
+                TOPICS["ground_truth"], markers_msg(self.scene.objects, now_ns)
+            )
 
     async def _publish_latched(self, topic: Topic, msg: dict[str, Any]) -> None:
         await self._client.advertise(*topic.pair, latch=True)
@@ -257,13 +279,20 @@ class SimulatorNode:
             self._tracer.record(topic.name, stamp_ns, "generate", stamp_ns, self._clock_ns())
 
     async def _log_timings(self) -> None:
-        log.info("generation times: %s; physics lateness %s; collisions %d", "; ".join(
-            f"{name} {times.summary()}" for name, times in self.timings.items()),
-            self.physics_lateness.summary(), self.collisions)
+        log.info(
+            "generation times: %s; physics lateness %s; collisions %d",
+            "; ".join(f"{name} {times.summary()}" for name, times in self.timings.items()),
+            self.physics_lateness.summary(),
+            self.collisions,
+        )
 
 
-async def _every(period_s: float, action: Callable[[], Awaitable[None]],
-                 times: GenerationTimes | None = None, phase: float = 0.0) -> None:
+async def _every(
+    period_s: float,
+    action: Callable[[], Awaitable[None]],
+    times: GenerationTimes | None = None,
+    phase: float = 0.0,
+) -> None:
     """Call `action` every `period_s` on a fixed schedule, the first call `phase` periods from
     now. After an overrun the next tick starts at once (late, its own stamp), so a scan that
     just misses its period costs no tick; only ticks a whole period behind are skipped (and
@@ -286,14 +315,27 @@ async def _every(period_s: float, action: Callable[[], Awaitable[None]],
         await asyncio.sleep(max(0.0, next_s - loop.time()))
 
 
-async def serve(url: str, cfg: SimConfig, stop: asyncio.Event, *, encoding: Encoding = "cbor",
-                scene: Scene | None = None, connect_timeout_s: float = 10.0) -> None:
+async def serve(
+    url: str,
+    cfg: SimConfig,
+    stop: asyncio.Event,
+    *,
+    encoding: Encoding = "cbor",
+    scene: Scene | None = None,
+    connect_timeout_s: float = 10.0,
+) -> None:
     """Build the scene (off the event loop), connect to the bridge at `url`, run until `stop`."""
     if scene is None:
         scene = await asyncio.to_thread(build_scene, cfg.scene, seed=cfg.seed)
-    async with node_links(url, "simulator", encoding=encoding,
-                          connect_timeout_s=connect_timeout_s) as links:
-        log.info("simulator connected to %s (%s, bulk and realtime connections); %d triangles",
-                 url, encoding, scene.triangle_count)
-        await SimulatorNode(links.bulk, cfg, scene, realtime=links.realtime,
-                            tracer=links.tracer).run(stop)
+    async with node_links(
+        url, "simulator", encoding=encoding, connect_timeout_s=connect_timeout_s
+    ) as links:
+        log.info(
+            "simulator connected to %s (%s, bulk and realtime connections); %d triangles",
+            url,
+            encoding,
+            scene.triangle_count,
+        )
+        await SimulatorNode(
+            links.bulk, cfg, scene, realtime=links.realtime, tracer=links.tracer
+        ).run(stop)

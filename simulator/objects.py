@@ -40,17 +40,31 @@ class SceneObjects:
 
     @classmethod
     def empty(cls) -> SceneObjects:
-        return cls(np.empty(0, np.int64), np.empty(0, dtype=object), np.empty((0, 3)),
-                   np.empty(0), np.empty((0, 3)))
+        return cls(
+            np.empty(0, np.int64),
+            np.empty(0, dtype=object),
+            np.empty((0, 3)),
+            np.empty(0),
+            np.empty((0, 3)),
+        )
 
     def concat(self, other: SceneObjects) -> SceneObjects:
-        return SceneObjects(*(np.concatenate([a, b]) for a, b in (
-            (self.ids, other.ids), (self.kinds, other.kinds),
-            (self.centre_xyz, other.centre_xyz), (self.yaw_rad, other.yaw_rad),
-            (self.size_xyz, other.size_xyz))))
+        return SceneObjects(
+            *(
+                np.concatenate([a, b])
+                for a, b in (
+                    (self.ids, other.ids),
+                    (self.kinds, other.kinds),
+                    (self.centre_xyz, other.centre_xyz),
+                    (self.yaw_rad, other.yaw_rad),
+                    (self.size_xyz, other.size_xyz),
+                )
+            )
+        )
 
-    def in_sensor_frame(self, origin: np.ndarray, rotation: np.ndarray,
-                        sensor_yaw_rad: float) -> tuple[np.ndarray, np.ndarray]:
+    def in_sensor_frame(
+        self, origin: np.ndarray, rotation: np.ndarray, sensor_yaw_rad: float
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Centres (k, 3) and yaws (k,) seen from a sensor at `origin` (3,) with rotation
         sensor -> map (3, 3) whose heading is `sensor_yaw_rad` (yaw only: the boxes stay
         upright in a tilted sensor's frame, an approximation for pitched mounts)."""
@@ -59,8 +73,14 @@ class SceneObjects:
         return centres, yaws
 
 
-def object_boxes(kind: str, vertices: np.ndarray, index: np.ndarray, positions: np.ndarray,
-                 yaws_rad: np.ndarray, first_id: int) -> SceneObjects:
+def object_boxes(
+    kind: str,
+    vertices: np.ndarray,
+    index: np.ndarray,
+    positions: np.ndarray,
+    yaws_rad: np.ndarray,
+    first_id: int,
+) -> SceneObjects:
     """Oriented boxes of k instanced objects from their vertices.
 
     vertices : (n, 3) map frame; index : (n,) int, the instance (0 .. k-1) of each vertex;
@@ -69,8 +89,9 @@ def object_boxes(kind: str, vertices: np.ndarray, index: np.ndarray, positions: 
     k = len(positions)
     rel = np.asarray(vertices, np.float64) - np.asarray(positions)[index]
     c, s = np.cos(yaws_rad)[index], np.sin(yaws_rad)[index]
-    local = np.column_stack([c * rel[:, 0] + s * rel[:, 1], -s * rel[:, 0] + c * rel[:, 1],
-                             rel[:, 2]])
+    local = np.column_stack(
+        [c * rel[:, 0] + s * rel[:, 1], -s * rel[:, 0] + c * rel[:, 1], rel[:, 2]]
+    )
     lo = np.full((k, 3), np.inf)
     hi = np.full((k, 3), -np.inf)
     np.minimum.at(lo, index, local)
@@ -78,6 +99,12 @@ def object_boxes(kind: str, vertices: np.ndarray, index: np.ndarray, positions: 
     mid = 0.5 * (lo + hi)
     yc, ys = np.cos(yaws_rad), np.sin(yaws_rad)
     centre = np.asarray(positions, np.float64) + np.column_stack(
-        [yc * mid[:, 0] - ys * mid[:, 1], ys * mid[:, 0] + yc * mid[:, 1], mid[:, 2]])
-    return SceneObjects(first_id + np.arange(k, dtype=np.int64), np.full(k, kind, dtype=object),
-                        centre, np.asarray(yaws_rad, np.float64), hi - lo)
+        [yc * mid[:, 0] - ys * mid[:, 1], ys * mid[:, 0] + yc * mid[:, 1], mid[:, 2]]
+    )
+    return SceneObjects(
+        first_id + np.arange(k, dtype=np.int64),
+        np.full(k, kind, dtype=object),
+        centre,
+        np.asarray(yaws_rad, np.float64),
+        hi - lo,
+    )

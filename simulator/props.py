@@ -65,8 +65,14 @@ def instance(
     return moved.reshape(-1, 3), faces.reshape(-1, 3)
 
 
-def _part(template: trimesh.Trimesh, material: Material, positions: np.ndarray,
-          yaws: np.ndarray, scales: np.ndarray | None = None, first_id: int = 0) -> MeshPart:
+def _part(
+    template: trimesh.Trimesh,
+    material: Material,
+    positions: np.ndarray,
+    yaws: np.ndarray,
+    scales: np.ndarray | None = None,
+    first_id: int = 0,
+) -> MeshPart:
     """`template` instanced at `positions`; instance i is object first_id + i."""
     vertices, faces = instance(template, positions, yaws, scales)
     per_instance = len(template.faces)
@@ -74,8 +80,9 @@ def _part(template: trimesh.Trimesh, material: Material, positions: np.ndarray,
     return MeshPart(vertices, faces, material, ids)
 
 
-def _objects(kind: str, parts: list[MeshPart], positions: np.ndarray, yaws: np.ndarray,
-             first_id: int) -> SceneObjects:
+def _objects(
+    kind: str, parts: list[MeshPart], positions: np.ndarray, yaws: np.ndarray, first_id: int
+) -> SceneObjects:
     """Oriented boxes of the objects first_id .. that `parts` build, `kind` for all."""
     vertices = np.concatenate([p.vertices for p in parts])
     ids = np.concatenate([_vertex_ids(p) for p in parts]) - first_id
@@ -100,15 +107,20 @@ def _roof(extent_x: float, extent_y: float, z_eaves: float, rise: float) -> trim
     """A gable roof: a triangular prism whose ridge runs along x."""
     hx, hy = extent_x / 2, extent_y / 2
     vertices = [
-        (-hx, -hy, z_eaves), (-hx, hy, z_eaves), (-hx, 0.0, z_eaves + rise),
-        (hx, -hy, z_eaves), (hx, hy, z_eaves), (hx, 0.0, z_eaves + rise),
+        (-hx, -hy, z_eaves),
+        (-hx, hy, z_eaves),
+        (-hx, 0.0, z_eaves + rise),
+        (hx, -hy, z_eaves),
+        (hx, hy, z_eaves),
+        (hx, 0.0, z_eaves + rise),
     ]
     faces = [(0, 2, 1), (3, 4, 5), (0, 3, 5), (0, 5, 2), (1, 2, 5), (1, 5, 4), (0, 1, 4), (0, 4, 3)]
     return trimesh.Trimesh(vertices=vertices, faces=faces, process=False)
 
 
-def _stage_sites(cfg: SceneConfig, course: RiverCourse,
-                 rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _stage_sites(
+    cfg: SceneConfig, course: RiverCourse, rng: np.random.Generator
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Positions (k, 3), yaws (k,) and bank side (k,) of the landing stages, spread along y."""
     k = cfg.landing_stages
     y = np.linspace(-0.35, 0.35, k) * cfg.size_m + rng.uniform(-40, 40, k)
@@ -118,8 +130,9 @@ def _stage_sites(cfg: SceneConfig, course: RiverCourse,
     return np.column_stack([x, y, np.full(k, course.water_level_m)]), yaw, side
 
 
-def landing_stages(cfg: SceneConfig, course: RiverCourse, rng: np.random.Generator,
-                   first_id: int = 0) -> Props:
+def landing_stages(
+    cfg: SceneConfig, course: RiverCourse, rng: np.random.Generator, first_id: int = 0
+) -> Props:
     """Pontoons on the water with a gangway to the bank, plus moored vessels alongside."""
     positions, yaws, side = _stage_sites(cfg, course, rng)
     # Pontoon 20 m x 4 m floating with 0.5 m freeboard; gangway reaches 10 m up onto the bank.
@@ -139,18 +152,34 @@ def landing_stages(cfg: SceneConfig, course: RiverCourse, rng: np.random.Generat
         forward = np.column_stack([np.cos(vessel_yaws), np.sin(vessel_yaws), 0 * vessel_yaws])
         cabins = hulls + forward  # cabin 1 m forward of the hull centre
         vessels = [
-            _part(_box(8.0, 2.6, 1.6, -0.6), materials.VESSEL, hulls, vessel_yaws,
-                  first_id=first_vessel),
-            _part(_box(3.0, 2.0, 1.5, 1.0), materials.VESSEL, cabins, vessel_yaws,
-                  first_id=first_vessel),
+            _part(
+                _box(8.0, 2.6, 1.6, -0.6),
+                materials.VESSEL,
+                hulls,
+                vessel_yaws,
+                first_id=first_vessel,
+            ),
+            _part(
+                _box(3.0, 2.0, 1.5, 1.0),
+                materials.VESSEL,
+                cabins,
+                vessel_yaws,
+                first_id=first_vessel,
+            ),
         ]
         parts += vessels
         objects = objects.concat(_objects("vessel", vessels, hulls, vessel_yaws, first_vessel))
     return Props(parts, objects)
 
 
-def _land_sites(course: RiverCourse, field: HeightField, rng: np.random.Generator, count: int,
-                near_m: float, far_m: float) -> np.ndarray:
+def _land_sites(
+    course: RiverCourse,
+    field: HeightField,
+    rng: np.random.Generator,
+    count: int,
+    near_m: float,
+    far_m: float,
+) -> np.ndarray:
     """`count` points on land between `near_m` and `far_m` beyond the river banks."""
     y = rng.uniform(-0.45, 0.45, count) * (field.extent_m[1])
     offset = course.half_width_m + BANK_WIDTH_M + rng.uniform(near_m, far_m, count)
@@ -158,9 +187,13 @@ def _land_sites(course: RiverCourse, field: HeightField, rng: np.random.Generato
     return np.column_stack([x, y, field.height_at(x, y)])
 
 
-def trees_and_houses(cfg: SceneConfig, course: RiverCourse, field: HeightField,
-                     rng: np.random.Generator,
-                     first_id: int = 0) -> Props:
+def trees_and_houses(
+    cfg: SceneConfig,
+    course: RiverCourse,
+    field: HeightField,
+    rng: np.random.Generator,
+    first_id: int = 0,
+) -> Props:
     """Trees along the banks and houses a little further up the valley sides."""
     parts: list[MeshPart] = []
     objects = SceneObjects.empty()
@@ -172,8 +205,10 @@ def trees_and_houses(cfg: SceneConfig, course: RiverCourse, field: HeightField,
         trunk.apply_translation((0, 0, 1.5))  # sink 0.25 m into the ground on slopes
         crown = trimesh.creation.icosphere(subdivisions=1, radius=2.5)
         crown.apply_translation((0, 0, 5.0))
-        trees = [_part(trunk, materials.WOOD, sites, yaws, scale, first_id),
-                 _part(crown, materials.FOLIAGE, sites, yaws, scale, first_id)]
+        trees = [
+            _part(trunk, materials.WOOD, sites, yaws, scale, first_id),
+            _part(crown, materials.FOLIAGE, sites, yaws, scale, first_id),
+        ]
         parts += trees
         objects = objects.concat(_objects("tree", trees, sites, yaws, first_id))
     if cfg.houses:
@@ -181,10 +216,10 @@ def trees_and_houses(cfg: SceneConfig, course: RiverCourse, field: HeightField,
         sites = _land_sites(course, field, rng, cfg.houses, 40.0, 300.0)
         sites[:, 2] -= 0.5  # foundations into the slope
         yaws = rng.uniform(0, 2 * np.pi, cfg.houses)
-        houses = [_part(_box(10.0, 8.0, 6.5, 0.0), materials.BRICK, sites, yaws,
-                        first_id=first_house),
-                  _part(_roof(10.6, 8.6, 6.5, 3.0), materials.ROOF, sites, yaws,
-                        first_id=first_house)]
+        houses = [
+            _part(_box(10.0, 8.0, 6.5, 0.0), materials.BRICK, sites, yaws, first_id=first_house),
+            _part(_roof(10.6, 8.6, 6.5, 3.0), materials.ROOF, sites, yaws, first_id=first_house),
+        ]
         parts += houses
         objects = objects.concat(_objects("house", houses, sites, yaws, first_house))
     return Props(parts, objects)

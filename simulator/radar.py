@@ -99,8 +99,12 @@ class Radar:
         origin, rotation = sensor_pose_in_map(pose, cfg.mount, scene.water_level_m)
         rotate_rows(geo.directions_sensor, rotation, self._directions_map)
         fill_origins(self._origins, origin)
-        range_m, prim = self._caster.cast(scene, self._origins, self._directions_map,
-                                          cfg.range_max_m / float(geo.cos_elevation.min()))
+        range_m, prim = self._caster.cast(
+            scene,
+            self._origins,
+            self._directions_map,
+            cfg.range_max_m / float(geo.cos_elevation.min()),
+        )
         horizontal_m = range_m * geo.cos_elevation  # eq. 3.5.1 uses the 2-D polar position
         cell = np.floor((horizontal_m - cfg.range_min_m) / cfg.range_step_m)
         valid = (prim >= 0) & (cell >= 0) & (cell < geo.num_cells)
@@ -109,14 +113,16 @@ class Radar:
 
     def _image(self, scene: Scene, flat: np.ndarray, faces: np.ndarray) -> np.ndarray:
         cfg, geo = self.cfg, self.geometry
-        image = np.bincount(flat, weights=scene.radar_reflectance[faces],
-                            minlength=geo.num_beams * geo.num_cells).astype(np.float32)
+        image = np.bincount(
+            flat, weights=scene.radar_reflectance[faces], minlength=geo.num_beams * geo.num_cells
+        ).astype(np.float32)
         if cfg.clutter_scale > 0:
             image += self._rng.rayleigh(cfg.clutter_scale, image.shape).astype(np.float32)
         return image.reshape(geo.num_beams, geo.num_cells)
 
-    def _sources(self, scene: Scene, flat: np.ndarray,
-                 faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def _sources(
+        self, scene: Scene, flat: np.ndarray, faces: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Per cell the source with the largest summed reflectance, and the rays per object.
 
         Sources are numbered objects 0..k-1, then land, then water; the (cell, source) pairs
@@ -175,8 +181,9 @@ class RadarSensor:
             return Generated(self.radar.message(self.radar.sweep(self._scene, pose), stamp_ns))
         sweep = self.radar.sweep_with_sources(self._scene, pose)
         truth = radar_truth(self._scene, self._cfg.radar, pose, sweep, stamp_ns)
-        return Generated(self.radar.message(sweep.image, stamp_ns),
-                         ((TOPICS["radar_truth"].name, truth),))
+        return Generated(
+            self.radar.message(sweep.image, stamp_ns), ((TOPICS["radar_truth"].name, truth),)
+        )
 
     def close(self) -> None:
         self.radar.close()

@@ -61,21 +61,31 @@ class Scene:
         ).astype(np.int32)
         per_face = [len(p.faces) for p in parts]
         self.radar_reflectance = np.repeat(
-            np.array([p.material.radar_reflectance for p in parts], np.float32), per_face)
+            np.array([p.material.radar_reflectance for p in parts], np.float32), per_face
+        )
         self.lidar_reflectivity = np.repeat(
-            np.array([p.material.lidar_reflectivity for p in parts], np.float32), per_face)
+            np.array([p.material.lidar_reflectivity for p in parts], np.float32), per_face
+        )
         self.colour_rgb = np.repeat(
-            np.array([p.material.colour_rgb for p in parts], np.uint8), per_face, axis=0)
+            np.array([p.material.colour_rgb for p in parts], np.uint8), per_face, axis=0
+        )
         self.face_normals = _unit_normals(self.vertices, self.faces)
         self.face_source = np.concatenate(
-            [np.broadcast_to(np.asarray(p.source, np.int32), len(p.faces)) for p in parts])
+            [np.broadcast_to(np.asarray(p.source, np.int32), len(p.faces)) for p in parts]
+        )
         self.objects = objects or SceneObjects.empty()
         self.water_level_m = float(water_level_m)
         self.start_pose = start_pose or Pose2D(0.0, 0.0, 0.0)
         self.terrain = terrain
-        for array in (self.vertices, self.faces, self.radar_reflectance,
-                      self.lidar_reflectivity, self.colour_rgb, self.face_normals,
-                      self.face_source):
+        for array in (
+            self.vertices,
+            self.faces,
+            self.radar_reflectance,
+            self.lidar_reflectivity,
+            self.colour_rgb,
+            self.face_normals,
+            self.face_source,
+        ):
             array.setflags(write=False)
         self.embree = rtcore_scene.EmbreeScene()
         TriangleMesh(self.embree, self.vertices, self.faces)
@@ -106,8 +116,14 @@ def terrain_parts(field: HeightField, water_level_m: float) -> list[MeshPart]:
     parts = [MeshPart(vertices, faces[mask], material) for mask, material in bands if mask.any()]
     x0, y0 = field.origin_x_m, field.origin_y_m
     x1, y1 = x0 + field.extent_m[0], y0 + field.extent_m[1]
-    water = np.array([[x0, y0, water_level_m], [x1, y0, water_level_m],
-                      [x1, y1, water_level_m], [x0, y1, water_level_m]])
+    water = np.array(
+        [
+            [x0, y0, water_level_m],
+            [x1, y0, water_level_m],
+            [x1, y1, water_level_m],
+            [x0, y1, water_level_m],
+        ]
+    )
     parts.append(MeshPart(water, np.array([[0, 1, 2], [0, 2, 3]]), materials.WATER, WATER))
     return parts
 
@@ -134,13 +150,15 @@ def build_scene(cfg: SceneConfig | None = None, *, seed: int = 7) -> Scene:
         field, course = generate_valley(cfg, rng)
         water_level_m = course.water_level_m
         y_start = -0.3 * cfg.size_m
-        start = Pose2D(float(course.centre_x_m(y_start)), y_start,
-                       float(course.heading_rad(y_start)))
+        start = Pose2D(
+            float(course.centre_x_m(y_start)), y_start, float(course.heading_rad(y_start))
+        )
     else:
         raw = load_terrain(Path(cfg.terrain_source), cfg.heightmap_spacing_m, cfg.heightmap_range_m)
         field = raw.centred().resampled(cfg.terrain_cells)
-        water_level_m = (float(field.heights_m.min()) + 1.0 if cfg.water_level_m is None
-                         else cfg.water_level_m)
+        water_level_m = (
+            float(field.heights_m.min()) + 1.0 if cfg.water_level_m is None else cfg.water_level_m
+        )
         course, start = None, deepest_water_pose(field, water_level_m)
     parts = terrain_parts(field, water_level_m)
     objects = SceneObjects.empty()
@@ -151,8 +169,13 @@ def build_scene(cfg: SceneConfig | None = None, *, seed: int = 7) -> Scene:
         objects = stages.objects.concat(rest.objects)
     elif cfg.props_on_loaded_terrain:
         log.warning("props need the procedural river course; none placed on loaded terrain")
-    scene = Scene(parts, water_level_m=water_level_m, start_pose=start, terrain=field,
-                  objects=objects)
-    log.info("scene: %d triangles, water level %.2f m, start %s",
-             scene.triangle_count, water_level_m, start)
+    scene = Scene(
+        parts, water_level_m=water_level_m, start_pose=start, terrain=field, objects=objects
+    )
+    log.info(
+        "scene: %d triangles, water level %.2f m, start %s",
+        scene.triangle_count,
+        water_level_m,
+        start,
+    )
     return scene

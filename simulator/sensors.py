@@ -36,8 +36,15 @@ class OdometrySensor:
 
     def generate(self, capture: Capture) -> Generated:
         state = capture.step.state
-        return Generated(odometry(state.pose, self._water_level_m, (state.u_mps, state.v_mps),
-                                  state.r_radps, capture.stamp_ns))
+        return Generated(
+            odometry(
+                state.pose,
+                self._water_level_m,
+                (state.u_mps, state.v_mps),
+                state.r_radps,
+                capture.stamp_ns,
+            )
+        )
 
     def close(self) -> None:
         """Nothing to release."""
@@ -61,12 +68,20 @@ class TfSensor:
 
 
 SensorFactory = Callable[[SimConfig, Scene], Sensor]
-SENSORS: tuple[SensorFactory, ...] = (LidarSensor, RadarSensor, CameraSensor, ImuSensor,
-                                      GnssSensor, OdometrySensor, TfSensor)
+SENSORS: tuple[SensorFactory, ...] = (
+    LidarSensor,
+    RadarSensor,
+    CameraSensor,
+    ImuSensor,
+    GnssSensor,
+    OdometrySensor,
+    TfSensor,
+)
 
 
-def build_sensors(cfg: SimConfig, scene: Scene,
-                  factories: Sequence[SensorFactory] = SENSORS) -> list[Sensor]:
+def build_sensors(
+    cfg: SimConfig, scene: Scene, factories: Sequence[SensorFactory] = SENSORS
+) -> list[Sensor]:
     """One sensor of each factory, in order."""
     return [factory(cfg, scene) for factory in factories]
 
@@ -82,7 +97,13 @@ def static_transforms(sensors: Sequence[Sensor], stamp_ns: int) -> dict[str, Any
         if frame.extra is not None:
             rotation = rotation @ frame.extra
         mount = frame.mount
-        transforms.append(transform_stamped(stamp_ns, BASE_FRAME, frame.frame_id,
-                                            (mount.x_m, mount.y_m, mount.z_m),
-                                            quaternion_from_matrix(rotation)))
+        transforms.append(
+            transform_stamped(
+                stamp_ns,
+                BASE_FRAME,
+                frame.frame_id,
+                (mount.x_m, mount.y_m, mount.z_m),
+                quaternion_from_matrix(rotation),
+            )
+        )
     return tf_message(transforms)

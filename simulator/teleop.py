@@ -33,16 +33,25 @@ class Action(enum.Enum):
 # Arrow keys arrive as ANSI escape sequences: CSI (normal cursor mode) or SS3 (application
 # cursor mode, which some terminals switch to); both spellings map to the same action.
 KEYS: dict[bytes, Action] = {
-    b"\x1b[A": Action.SURGE_UP, b"\x1bOA": Action.SURGE_UP,
-    b"\x1b[B": Action.SURGE_DOWN, b"\x1bOB": Action.SURGE_DOWN,
-    b"\x1b[D": Action.YAW_LEFT, b"\x1bOD": Action.YAW_LEFT,
-    b"\x1b[C": Action.YAW_RIGHT, b"\x1bOC": Action.YAW_RIGHT,
-    b"w": Action.SURGE_UP, b"W": Action.SURGE_UP,
-    b"s": Action.SURGE_DOWN, b"S": Action.SURGE_DOWN,
-    b"a": Action.YAW_LEFT, b"A": Action.YAW_LEFT,
-    b"d": Action.YAW_RIGHT, b"D": Action.YAW_RIGHT,
+    b"\x1b[A": Action.SURGE_UP,
+    b"\x1bOA": Action.SURGE_UP,
+    b"\x1b[B": Action.SURGE_DOWN,
+    b"\x1bOB": Action.SURGE_DOWN,
+    b"\x1b[D": Action.YAW_LEFT,
+    b"\x1bOD": Action.YAW_LEFT,
+    b"\x1b[C": Action.YAW_RIGHT,
+    b"\x1bOC": Action.YAW_RIGHT,
+    b"w": Action.SURGE_UP,
+    b"W": Action.SURGE_UP,
+    b"s": Action.SURGE_DOWN,
+    b"S": Action.SURGE_DOWN,
+    b"a": Action.YAW_LEFT,
+    b"A": Action.YAW_LEFT,
+    b"d": Action.YAW_RIGHT,
+    b"D": Action.YAW_RIGHT,
     b" ": Action.STOP,
-    b"q": Action.QUIT, b"Q": Action.QUIT,
+    b"q": Action.QUIT,
+    b"Q": Action.QUIT,
     b"\x03": Action.QUIT,  # Ctrl-C when the terminal does not turn it into SIGINT
     b"\x04": Action.QUIT,  # Ctrl-D
 }
@@ -83,8 +92,11 @@ class TeleopScale(BaseModel):
 
     @classmethod
     def of(cls, vessel: VesselConfig, steps: int = 10) -> TeleopScale:
-        return cls(max_surge_force_n=vessel.max_surge_force_n,
-                   max_yaw_moment_nm=vessel.max_yaw_moment_nm, steps=steps)
+        return cls(
+            max_surge_force_n=vessel.max_surge_force_n,
+            max_yaw_moment_nm=vessel.max_yaw_moment_nm,
+            steps=steps,
+        )
 
     @property
     def surge_step_n(self) -> float:
@@ -127,12 +139,16 @@ class TeleopCommand:
 
     def wrench(self, scale: TeleopScale) -> Message:
         """Canonical geometry_msgs/msg/Wrench: force.x surge (N), torque.z yaw (N m)."""
-        return {"force": {"x": self.surge_force_n(scale), "y": 0.0, "z": 0.0},
-                "torque": {"x": 0.0, "y": 0.0, "z": self.yaw_moment_nm(scale)}}
+        return {
+            "force": {"x": self.surge_force_n(scale), "y": 0.0, "z": 0.0},
+            "torque": {"x": 0.0, "y": 0.0, "z": self.yaw_moment_nm(scale)},
+        }
 
     def status(self, scale: TeleopScale) -> str:
         """One status line, e.g. `surge +1200 N ( 30%)  yaw  -600 N m (-10%)`."""
         surge_pct = 100 * self.surge_steps / scale.steps
         yaw_pct = 100 * self.yaw_steps / scale.steps
-        return (f"surge {self.surge_force_n(scale):+6.0f} N ({surge_pct:+4.0f}%)  "
-                f"yaw {self.yaw_moment_nm(scale):+6.0f} N m ({yaw_pct:+4.0f}%)")
+        return (
+            f"surge {self.surge_force_n(scale):+6.0f} N ({surge_pct:+4.0f}%)  "
+            f"yaw {self.yaw_moment_nm(scale):+6.0f} N m ({yaw_pct:+4.0f}%)"
+        )

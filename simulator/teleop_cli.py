@@ -44,15 +44,30 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--bridge", default="ws://127.0.0.1:9090", help="rosbridge URL")
     parser.add_argument("--config", help="the simulator's TOML file, for the vessel's limits")
-    parser.add_argument("--rate", type=float, default=10.0,
-                        help="publish rate in Hz between key presses (default %(default)s)")
-    parser.add_argument("--steps", type=int, default=10,
-                        help="key presses from zero to full force (default %(default)s)")
+    parser.add_argument(
+        "--rate",
+        type=float,
+        default=10.0,
+        help="publish rate in Hz between key presses (default %(default)s)",
+    )
+    parser.add_argument(
+        "--steps",
+        type=int,
+        default=10,
+        help="key presses from zero to full force (default %(default)s)",
+    )
     parser.add_argument("--encoding", choices=("cbor", "json"), default="cbor")
-    parser.add_argument("--connect-timeout", type=float, default=10.0,
-                        help="seconds to keep retrying the first connection")
-    parser.add_argument("--stdin-keys", action="store_true",
-                        help="read keys from stdin even when it is not a terminal (a pipe)")
+    parser.add_argument(
+        "--connect-timeout",
+        type=float,
+        default=10.0,
+        help="seconds to keep retrying the first connection",
+    )
+    parser.add_argument(
+        "--stdin-keys",
+        action="store_true",
+        help="read keys from stdin even when it is not a terminal (a pipe)",
+    )
     parser.add_argument("--log-level", default="WARNING")
     return parser
 
@@ -109,8 +124,13 @@ def watch_keys(fd: int, actions: asyncio.Queue[Action]) -> None:
     loop.add_reader(fd, on_readable)
 
 
-async def steer(client: RosbridgeClient, actions: asyncio.Queue[Action], scale: TeleopScale,
-                rate_hz: float, status: StatusLine) -> TeleopCommand:
+async def steer(
+    client: RosbridgeClient,
+    actions: asyncio.Queue[Action],
+    scale: TeleopScale,
+    rate_hz: float,
+    status: StatusLine,
+) -> TeleopCommand:
     """Apply actions and publish the command on every key and every 1/`rate_hz` s until
     QUIT; then publish a zero wrench. Returns the command in force when QUIT came."""
     loop = asyncio.get_running_loop()
@@ -149,8 +169,9 @@ async def _run(args: argparse.Namespace, scale: TeleopScale, fd: int) -> None:
         handled.append(sig)
     status = StatusLine(sys.stdout)
     try:
-        async with RosbridgeClient(args.bridge, encoding=args.encoding, name="teleop",
-                                   connect_timeout=args.connect_timeout) as client:
+        async with RosbridgeClient(
+            args.bridge, encoding=args.encoding, name="teleop", connect_timeout=args.connect_timeout
+        ) as client:
             await client.advertise(*COMMAND)
             print(HELP_LINE, flush=True)
             watch_keys(fd, actions)
@@ -176,8 +197,9 @@ def main(argv: list[str] | None = None) -> int:
     """0 after q / Ctrl-C / end of input; 2 for bad options or stdin not being a terminal
     (without `--stdin-keys`); 1 when the bridge cannot be reached."""
     args = build_parser().parse_args(argv)
-    logging.basicConfig(level=args.log_level.upper(),
-                        format="%(asctime)s %(levelname)s %(name)s: %(message)s")
+    logging.basicConfig(
+        level=args.log_level.upper(), format="%(asctime)s %(levelname)s %(name)s: %(message)s"
+    )
     if args.rate <= 0 or args.steps < 1:
         print("riverbridge teleop: --rate must be > 0 and --steps >= 1", file=sys.stderr)
         return 2
@@ -190,15 +212,19 @@ def main(argv: list[str] | None = None) -> int:
     fd = _stdin_fd()
     is_terminal = fd is not None and os.isatty(fd)
     if fd is None or not (is_terminal or args.stdin_keys):
-        print("riverbridge teleop: stdin is not a terminal; run it in an interactive terminal, "
-              "or pass --stdin-keys to read keys from a pipe", file=sys.stderr)
+        print(
+            "riverbridge teleop: stdin is not a terminal; run it in an interactive terminal, "
+            "or pass --stdin-keys to read keys from a pipe",
+            file=sys.stderr,
+        )
         return 2
     try:
         with cbreak_terminal(fd) if is_terminal else contextlib.nullcontext():
             asyncio.run(_run(args, scale, fd))
     except ConnectionFailed as exc:
-        print(f"riverbridge teleop: cannot reach the bridge at {args.bridge}: {exc}",
-              file=sys.stderr)
+        print(
+            f"riverbridge teleop: cannot reach the bridge at {args.bridge}: {exc}", file=sys.stderr
+        )
         return 1
     except KeyboardInterrupt:  # Ctrl-C while still connecting, before our handler is set
         return 130

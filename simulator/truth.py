@@ -27,14 +27,26 @@ if TYPE_CHECKING:
 TRUTH_TYPE = "riverbridge_msgs/msg/GroundTruthArray"
 MARKERS_TYPE = "visualization_msgs/msg/MarkerArray"
 MARKER_CUBE, MARKER_ADD = 1, 0  # visualization_msgs/msg/Marker constants
-KIND_COLOURS = {"vessel": (1.0, 0.3, 0.2), "landing_stage": (0.9, 0.8, 0.2),
-                "tree": (0.2, 0.8, 0.3), "house": (0.7, 0.4, 0.9)}
+KIND_COLOURS = {
+    "vessel": (1.0, 0.3, 0.2),
+    "landing_stage": (0.9, 0.8, 0.2),
+    "tree": (0.2, 0.8, 0.3),
+    "house": (0.7, 0.4, 0.9),
+}
 
 
-def truth_msg(sensor: str, objects: SceneObjects, seen: np.ndarray, centres: np.ndarray,
-              yaws: np.ndarray, stamp_ns: int, frame_id: str, *,
-              dominant_cells: np.ndarray | None = None,
-              cell_source: np.ndarray | None = None) -> dict[str, Any]:
+def truth_msg(
+    sensor: str,
+    objects: SceneObjects,
+    seen: np.ndarray,
+    centres: np.ndarray,
+    yaws: np.ndarray,
+    stamp_ns: int,
+    frame_id: str,
+    *,
+    dominant_cells: np.ndarray | None = None,
+    cell_source: np.ndarray | None = None,
+) -> dict[str, Any]:
     """Canonical GroundTruthArray of the objects with ``seen`` > 0.
 
     seen : (k,) rays of this scan on each object; centres (k, 3), yaws (k,) in the sensor
@@ -42,16 +54,19 @@ def truth_msg(sensor: str, objects: SceneObjects, seen: np.ndarray, centres: np.
     """
     index = np.flatnonzero(seen > 0)
     dominant = np.zeros(len(objects), np.int64) if dominant_cells is None else dominant_cells
-    items = [{
-        "id": int(objects.ids[i]),
-        "kind": str(objects.kinds[i]),
-        "center": dict(zip("xyz", centres[i].tolist(), strict=True)),
-        "yaw_rad": _f32(yaws[i]),
-        "size": dict(zip("xyz", objects.size_xyz[i].tolist(), strict=True)),
-        "range_m": _f32(np.hypot(centres[i, 0], centres[i, 1])),
-        "returns": int(seen[i]),
-        "dominant_cells": int(dominant[i]),
-    } for i in index.tolist()]
+    items = [
+        {
+            "id": int(objects.ids[i]),
+            "kind": str(objects.kinds[i]),
+            "center": dict(zip("xyz", centres[i].tolist(), strict=True)),
+            "yaw_rad": _f32(yaws[i]),
+            "size": dict(zip("xyz", objects.size_xyz[i].tolist(), strict=True)),
+            "range_m": _f32(np.hypot(centres[i, 0], centres[i, 1])),
+            "returns": int(seen[i]),
+            "dominant_cells": int(dominant[i]),
+        }
+        for i in index.tolist()
+    ]
     shape = (0, 0) if cell_source is None else cell_source.shape
     return {
         "header": header(stamp_ns, frame_id),
@@ -59,13 +74,17 @@ def truth_msg(sensor: str, objects: SceneObjects, seen: np.ndarray, centres: np.
         "objects": items,
         "num_beams": int(shape[0]),
         "num_cells": int(shape[1]),
-        "cell_source": (np.empty(0, np.int32) if cell_source is None
-                        else np.ascontiguousarray(cell_source, np.int32).reshape(-1)),
+        "cell_source": (
+            np.empty(0, np.int32)
+            if cell_source is None
+            else np.ascontiguousarray(cell_source, np.int32).reshape(-1)
+        ),
     }
 
 
-def lidar_truth(scene: Scene, cfg: LidarConfig, pose: Pose2D, source: np.ndarray,
-                stamp_ns: int) -> dict[str, Any]:
+def lidar_truth(
+    scene: Scene, cfg: LidarConfig, pose: Pose2D, source: np.ndarray, stamp_ns: int
+) -> dict[str, Any]:
     """GroundTruthArray of one LIDAR scan; source : (n,) what each of its points hit."""
     origin, rotation = sensor_pose_in_map(pose, cfg.mount, scene.water_level_m)
     centres, yaws = scene.objects.in_sensor_frame(origin, rotation, pose.yaw_rad)
@@ -73,14 +92,24 @@ def lidar_truth(scene: Scene, cfg: LidarConfig, pose: Pose2D, source: np.ndarray
     return truth_msg("lidar", scene.objects, seen, centres, yaws, stamp_ns, cfg.frame_id)
 
 
-def radar_truth(scene: Scene, cfg: RadarConfig, pose: Pose2D, sweep: RadarSweep,
-                stamp_ns: int) -> dict[str, Any]:
+def radar_truth(
+    scene: Scene, cfg: RadarConfig, pose: Pose2D, sweep: RadarSweep, stamp_ns: int
+) -> dict[str, Any]:
     """GroundTruthArray of one radar sweep, with the dominant source of every cell."""
     origin, rotation = sensor_pose_in_map(pose, cfg.mount, scene.water_level_m)
     centres, yaws = scene.objects.in_sensor_frame(origin, rotation, pose.yaw_rad)
     dominant = counts_per_object(sweep.cell_source.reshape(-1), len(scene.objects))
-    return truth_msg("radar", scene.objects, sweep.object_rays, centres, yaws, stamp_ns,
-                     cfg.frame_id, dominant_cells=dominant, cell_source=sweep.cell_source)
+    return truth_msg(
+        "radar",
+        scene.objects,
+        sweep.object_rays,
+        centres,
+        yaws,
+        stamp_ns,
+        cfg.frame_id,
+        dominant_cells=dominant,
+        cell_source=sweep.cell_source,
+    )
 
 
 def counts_per_object(source: np.ndarray, count: int) -> np.ndarray:
@@ -96,26 +125,52 @@ def markers_msg(objects: SceneObjects, stamp_ns: int) -> dict[str, Any]:
         kind = str(objects.kinds[i])
         rgb = KIND_COLOURS.get(kind, (0.8, 0.8, 0.8))
         qx, qy, qz, qw = quaternion_from_yaw(float(objects.yaw_rad[i]))
-        markers.append(_marker(stamp_ns, kind, int(objects.ids[i]), {
-            "position": dict(zip("xyz", objects.centre_xyz[i].tolist(), strict=True)),
-            "orientation": {"x": qx, "y": qy, "z": qz, "w": qw},
-        }, dict(zip("xyz", np.maximum(objects.size_xyz[i], 0.01).tolist(), strict=True)), rgb))
+        markers.append(
+            _marker(
+                stamp_ns,
+                kind,
+                int(objects.ids[i]),
+                {
+                    "position": dict(zip("xyz", objects.centre_xyz[i].tolist(), strict=True)),
+                    "orientation": {"x": qx, "y": qy, "z": qz, "w": qw},
+                },
+                dict(zip("xyz", np.maximum(objects.size_xyz[i], 0.01).tolist(), strict=True)),
+                rgb,
+            )
+        )
     return {"markers": markers}
 
 
-def _marker(stamp_ns: int, ns: str, marker_id: int, pose: Message, scale: Message,
-            rgb: tuple[float, float, float]) -> dict[str, Any]:
+def _marker(
+    stamp_ns: int,
+    ns: str,
+    marker_id: int,
+    pose: Message,
+    scale: Message,
+    rgb: tuple[float, float, float],
+) -> dict[str, Any]:
     """A canonical visualization_msgs/msg/Marker CUBE with every other field at its default."""
     return {
-        "header": header(stamp_ns, MAP_FRAME), "ns": ns, "id": marker_id,
-        "type": MARKER_CUBE, "action": MARKER_ADD, "pose": pose, "scale": scale,
+        "header": header(stamp_ns, MAP_FRAME),
+        "ns": ns,
+        "id": marker_id,
+        "type": MARKER_CUBE,
+        "action": MARKER_ADD,
+        "pose": pose,
+        "scale": scale,
         # ColorRGBA is float32: values that float32 holds exactly keep every encoding equal
         "color": {"r": _f32(rgb[0]), "g": _f32(rgb[1]), "b": _f32(rgb[2]), "a": _f32(0.4)},
-        "lifetime": {"sec": 0, "nanosec": 0}, "frame_locked": False, "points": [],
-        "colors": [], "texture_resource": "",
+        "lifetime": {"sec": 0, "nanosec": 0},
+        "frame_locked": False,
+        "points": [],
+        "colors": [],
+        "texture_resource": "",
         "texture": {"header": header(0, ""), "format": "", "data": b""},
-        "uv_coordinates": [], "text": "", "mesh_resource": "",
-        "mesh_file": {"filename": "", "data": b""}, "mesh_use_embedded_materials": False,
+        "uv_coordinates": [],
+        "text": "",
+        "mesh_resource": "",
+        "mesh_file": {"filename": "", "data": b""},
+        "mesh_use_embedded_materials": False,
     }
 
 

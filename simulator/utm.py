@@ -39,24 +39,30 @@ WGS84 = Ellipsoid(6_378_137.0, 1 / 298.257223563)  # GRS80 (ETRS89) differs by <
 
 def _series(n: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Krüger coefficients alpha (forward), beta (inverse), delta (conformal -> geodetic)."""
-    alpha = np.array([
-        n / 2 - 2 * n**2 / 3 + 5 * n**3 / 16 + 41 * n**4 / 180,
-        13 * n**2 / 48 - 3 * n**3 / 5 + 557 * n**4 / 1440,
-        61 * n**3 / 240 - 103 * n**4 / 140,
-        49561 * n**4 / 161280,
-    ])
-    beta = np.array([
-        n / 2 - 2 * n**2 / 3 + 37 * n**3 / 96 - n**4 / 360,
-        n**2 / 48 + n**3 / 15 - 437 * n**4 / 1440,
-        17 * n**3 / 480 - 37 * n**4 / 840,
-        4397 * n**4 / 161280,
-    ])
-    delta = np.array([
-        2 * n - 2 * n**2 / 3 - 2 * n**3 + 116 * n**4 / 45,
-        7 * n**2 / 3 - 8 * n**3 / 5 - 227 * n**4 / 45,
-        56 * n**3 / 15 - 136 * n**4 / 35,
-        4279 * n**4 / 630,
-    ])
+    alpha = np.array(
+        [
+            n / 2 - 2 * n**2 / 3 + 5 * n**3 / 16 + 41 * n**4 / 180,
+            13 * n**2 / 48 - 3 * n**3 / 5 + 557 * n**4 / 1440,
+            61 * n**3 / 240 - 103 * n**4 / 140,
+            49561 * n**4 / 161280,
+        ]
+    )
+    beta = np.array(
+        [
+            n / 2 - 2 * n**2 / 3 + 37 * n**3 / 96 - n**4 / 360,
+            n**2 / 48 + n**3 / 15 - 437 * n**4 / 1440,
+            17 * n**3 / 480 - 37 * n**4 / 840,
+            4397 * n**4 / 161280,
+        ]
+    )
+    delta = np.array(
+        [
+            2 * n - 2 * n**2 / 3 - 2 * n**3 + 116 * n**4 / 45,
+            7 * n**2 / 3 - 8 * n**3 / 5 - 227 * n**4 / 45,
+            56 * n**3 / 15 - 136 * n**4 / 35,
+            4279 * n**4 / 630,
+        ]
+    )
     return alpha, beta, delta
 
 
@@ -67,9 +73,13 @@ def central_meridian_deg(zone: int) -> float:
     return 6.0 * zone - 183.0
 
 
-def tm_forward(lat_deg: npt.ArrayLike, lon_deg: npt.ArrayLike, lon0_deg: float,
-               k0: float = UTM_SCALE,
-               ellipsoid: Ellipsoid = WGS84) -> tuple[np.ndarray, np.ndarray]:
+def tm_forward(
+    lat_deg: npt.ArrayLike,
+    lon_deg: npt.ArrayLike,
+    lon0_deg: float,
+    k0: float = UTM_SCALE,
+    ellipsoid: Ellipsoid = WGS84,
+) -> tuple[np.ndarray, np.ndarray]:
     """Geodetic (lat, lon) -> transverse Mercator (x east, y north) metres, no false offsets."""
     n = ellipsoid.n
     alpha, _, _ = _series(n)
@@ -85,8 +95,13 @@ def tm_forward(lat_deg: npt.ArrayLike, lon_deg: npt.ArrayLike, lon0_deg: float,
     return scale * (eta_p + eta_terms @ alpha), scale * (xi_p + xi_terms @ alpha)
 
 
-def tm_inverse(x_m: npt.ArrayLike, y_m: npt.ArrayLike, lon0_deg: float, k0: float = UTM_SCALE,
-               ellipsoid: Ellipsoid = WGS84) -> tuple[np.ndarray, np.ndarray]:
+def tm_inverse(
+    x_m: npt.ArrayLike,
+    y_m: npt.ArrayLike,
+    lon0_deg: float,
+    k0: float = UTM_SCALE,
+    ellipsoid: Ellipsoid = WGS84,
+) -> tuple[np.ndarray, np.ndarray]:
     """Transverse Mercator (x east, y north) metres, no false offsets -> (lat, lon) degrees."""
     _, beta, delta = _series(ellipsoid.n)
     scale = k0 * ellipsoid.rectifying_radius_m
@@ -100,16 +115,21 @@ def tm_inverse(x_m: npt.ArrayLike, y_m: npt.ArrayLike, lon0_deg: float, k0: floa
     return np.degrees(phi), lon0_deg + np.degrees(lam)
 
 
-def utm_to_latlon(easting_m: npt.ArrayLike, northing_m: npt.ArrayLike, zone: int,
-                  northern: bool = True) -> tuple[np.ndarray, np.ndarray]:
+def utm_to_latlon(
+    easting_m: npt.ArrayLike, northing_m: npt.ArrayLike, zone: int, northern: bool = True
+) -> tuple[np.ndarray, np.ndarray]:
     """UTM (easting, northing) metres in `zone` -> (lat, lon) degrees on WGS84."""
     false_northing = 0.0 if northern else UTM_FALSE_NORTHING_SOUTH_M
-    return tm_inverse(np.asarray(easting_m) - UTM_FALSE_EASTING_M,
-                      np.asarray(northing_m) - false_northing, central_meridian_deg(zone))
+    return tm_inverse(
+        np.asarray(easting_m) - UTM_FALSE_EASTING_M,
+        np.asarray(northing_m) - false_northing,
+        central_meridian_deg(zone),
+    )
 
 
-def latlon_to_utm(lat_deg: npt.ArrayLike, lon_deg: npt.ArrayLike,
-                  zone: int) -> tuple[np.ndarray, np.ndarray]:
+def latlon_to_utm(
+    lat_deg: npt.ArrayLike, lon_deg: npt.ArrayLike, zone: int
+) -> tuple[np.ndarray, np.ndarray]:
     """(lat, lon) degrees on WGS84 -> UTM (easting, northing) metres in `zone`."""
     x, y = tm_forward(lat_deg, lon_deg, central_meridian_deg(zone))
     false_northing = np.where(np.asarray(lat_deg) < 0, UTM_FALSE_NORTHING_SOUTH_M, 0.0)

@@ -53,15 +53,24 @@ def pid_alive(pid: int) -> bool:
 class Running:
     """One child process with its output collected line by line."""
 
-    def __init__(self, argv: Sequence[str], env: Mapping[str, str] | None = None,
-                 cwd: Path = REPO_ROOT) -> None:
+    def __init__(
+        self, argv: Sequence[str], env: Mapping[str, str] | None = None, cwd: Path = REPO_ROOT
+    ) -> None:
         self.argv = list(argv)
         self.lines: list[str] = []
         self._changed = threading.Condition()
         self.process = subprocess.Popen(
-            self.argv, cwd=cwd, env=dict(env or repo_env()), stdin=subprocess.DEVNULL,
-            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, encoding="utf-8",
-            errors="replace", start_new_session=True)
+            self.argv,
+            cwd=cwd,
+            env=dict(env or repo_env()),
+            stdin=subprocess.DEVNULL,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.STDOUT,
+            text=True,
+            encoding="utf-8",
+            errors="replace",
+            start_new_session=True,
+        )
         self._reader = threading.Thread(target=self._read, daemon=True)
         self._reader.start()
 
@@ -78,8 +87,9 @@ class Running:
         with self._changed:
             return "\n".join(self.lines)
 
-    def wait_for_line(self, pattern: re.Pattern[str] | str,
-                      timeout_s: float = STARTUP_TIMEOUT_S, after: int = 0) -> re.Match[str]:
+    def wait_for_line(
+        self, pattern: re.Pattern[str] | str, timeout_s: float = STARTUP_TIMEOUT_S, after: int = 0
+    ) -> re.Match[str]:
         """The first output line from index ``after`` on matching ``pattern``; AssertionError
         quoting the output if the process exits or ``timeout_s`` passes first."""
         regex = re.compile(pattern)
@@ -94,11 +104,11 @@ class Running:
                 if remaining <= 0 or exited:
                     raise AssertionError(
                         f"no line matching {regex.pattern!r} from `{' '.join(self.argv)}` "
-                        f"(exit code {self.process.poll()}); its output:\n{self.text()}")
+                        f"(exit code {self.process.poll()}); its output:\n{self.text()}"
+                    )
                 self._changed.wait(min(remaining, 1.0))
 
-    def stop(self, sig: signal.Signals = signal.SIGINT,
-             timeout_s: float = STOP_TIMEOUT_S) -> int:
+    def stop(self, sig: signal.Signals = signal.SIGINT, timeout_s: float = STOP_TIMEOUT_S) -> int:
         """Send ``sig`` (if still running) and wait; kill the whole session if it hangs."""
         if self.process.poll() is None:
             self.process.send_signal(sig)
@@ -107,8 +117,10 @@ class Running:
         except subprocess.TimeoutExpired:
             os.killpg(self.process.pid, signal.SIGKILL)
             self.process.wait(timeout=timeout_s)
-            raise AssertionError(f"`{' '.join(self.argv)}` ignored {sig.name} for {timeout_s} s;"
-                                 f" output:\n{self.text()}") from None
+            raise AssertionError(
+                f"`{' '.join(self.argv)}` ignored {sig.name} for {timeout_s} s;"
+                f" output:\n{self.text()}"
+            ) from None
         self._reader.join(timeout=10.0)
         self._close_output()
         return code

@@ -14,8 +14,16 @@ ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = ("bridge", "simulator", "navigation", "schemas", "clients")
 # What the message layer (schemas, apart from schemas.runtime) may not touch: it does no I/O,
 # keeps no time and starts no threads; process-level helpers live in schemas.runtime.
-RUNTIME_ONLY = ("asyncio", "socket", "threading", "time", "gc", "os", "threadpoolctl",
-                "schemas.runtime")
+RUNTIME_ONLY = (
+    "asyncio",
+    "socket",
+    "threading",
+    "time",
+    "gc",
+    "os",
+    "threadpoolctl",
+    "schemas.runtime",
+)
 
 
 def _run(*cmd: str) -> subprocess.CompletedProcess[str]:
@@ -35,6 +43,12 @@ def test_import_contracts_hold() -> None:
 
 def test_ruff_is_clean() -> None:
     result = _run(sys.executable, "-m", "ruff", "check", ".")
+    assert result.returncode == 0, result.stdout + result.stderr
+
+
+def test_ruff_format_is_applied() -> None:
+    """One layout everywhere (`ruff format .` before committing), so diffs show changes only."""
+    result = _run(sys.executable, "-m", "ruff", "format", "--check", ".")
     assert result.returncode == 0, result.stdout + result.stderr
 
 
@@ -61,21 +75,26 @@ def _sources(*packages: str) -> Iterator[Path]:
 
 def test_the_message_layer_does_no_runtime_work() -> None:
     """schemas' message modules import no clock, socket, thread or process helpers."""
-    offences = [f"{path.relative_to(ROOT)}:{line}: {module}"
-                for path in _sources("schemas") if "runtime" not in path.parts
-                for module, _names, line in _imports(path)
-                if any(module == banned or module.startswith(banned + ".")
-                       for banned in RUNTIME_ONLY)]
+    offences = [
+        f"{path.relative_to(ROOT)}:{line}: {module}"
+        for path in _sources("schemas")
+        if "runtime" not in path.parts
+        for module, _names, line in _imports(path)
+        if any(module == banned or module.startswith(banned + ".") for banned in RUNTIME_ONLY)
+    ]
     assert not offences, "\n".join(offences)
 
 
 def test_no_private_names_cross_modules() -> None:
     """A leading underscore means "this module's own": no other module imports it."""
-    offences = [f"{path.relative_to(ROOT)}:{line}: {module}.{name}"
-                for path in _sources(*PACKAGES)
-                for module, names, line in _imports(path)
-                if module.split(".")[0] in PACKAGES
-                for name in names if name.startswith("_")]
+    offences = [
+        f"{path.relative_to(ROOT)}:{line}: {module}.{name}"
+        for path in _sources(*PACKAGES)
+        for module, names, line in _imports(path)
+        if module.split(".")[0] in PACKAGES
+        for name in names
+        if name.startswith("_")
+    ]
     assert not offences, "\n".join(offences)
 
 
@@ -92,10 +111,15 @@ def test_every_module_is_named_in_its_packages_readme() -> None:
             # a subpackage may keep its own README (clients/report/README.md); any README from
             # the module's folder up to the package's names it relative to its own folder
             folders = [path.parent, *path.parent.parents]
-            folders = folders[:folders.index(ROOT / package) + 1]
-            if not any(f"`{path.relative_to(folder).as_posix()}`"
-                       in (folder / "README.md").read_text(encoding="utf-8")
-                       for folder in folders if (folder / "README.md").exists()):
-                missing.append(f"{package}/README.md does not name "
-                               f"{path.relative_to(ROOT / package).as_posix()}")
+            folders = folders[: folders.index(ROOT / package) + 1]
+            if not any(
+                f"`{path.relative_to(folder).as_posix()}`"
+                in (folder / "README.md").read_text(encoding="utf-8")
+                for folder in folders
+                if (folder / "README.md").exists()
+            ):
+                missing.append(
+                    f"{package}/README.md does not name "
+                    f"{path.relative_to(ROOT / package).as_posix()}"
+                )
     assert not missing, "\n".join(missing)

@@ -46,8 +46,12 @@ def test_every_type_is_registered(registry: TypeRegistry):
 
 def test_each_topic_says_how_often_it_comes_one_way():
     for topic in TOPICS.values():
-        ways = [bool(topic.rate_key), bool(topic.follows), topic.period_s is not None,
-                topic.latched]
+        ways = [
+            bool(topic.rate_key),
+            bool(topic.follows),
+            topic.period_s is not None,
+            topic.latched,
+        ]
         expected = 0 if topic.role == "command" else 1
         assert sum(ways) == expected, topic.key
         if topic.follows:
@@ -72,8 +76,9 @@ def test_fixed_periods_and_their_absence_are_named():
 
 
 def test_the_simulators_sensors_are_its_catalogue_streams():
-    assert [f.topic.key for f in SENSORS] == [t.key for t in
-                                              published_by("simulator", "sensor", "realtime")]
+    assert [f.topic.key for f in SENSORS] == [
+        t.key for t in published_by("simulator", "sensor", "realtime")
+    ]
     for factory in SENSORS:
         topic = factory.topic
         assert topic.role == ("sensor" if factory.schedule == "worker" else "realtime")
@@ -83,8 +88,7 @@ def test_the_simulators_sensors_are_its_catalogue_streams():
 
 
 def test_navigation_reads_and_writes_what_the_catalogue_says():
-    assert set(SENSOR_INPUTS.values()) | {IMU_INPUT} == {t.pair for t in
-                                                         consumed_by("navigation")}
+    assert set(SENSOR_INPUTS.values()) | {IMU_INPUT} == {t.pair for t in consumed_by("navigation")}
     assert {t.name: t.type for t in published_by("navigation")} == OUTPUT_TYPES
     assert NAVIGATION_TOPICS == streams_of("navigation") == tuple(OUTPUT_TYPES)
     handlers = Processors(NavigationConfig(lidar=LidarConfig(worker="thread"))).handlers()
@@ -92,6 +96,9 @@ def test_navigation_reads_and_writes_what_the_catalogue_says():
 
 
 def test_the_report_measures_the_thesis_sensors():
-    assert SENSOR_TOPICS == ("/lidar/points", "/radar/image", "/camera/image/compressed",
-                             "/imu/data")
-
+    assert SENSOR_TOPICS == (
+        "/lidar/points",
+        "/radar/image",
+        "/camera/image/compressed",
+        "/imu/data",
+    )

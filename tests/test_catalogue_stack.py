@@ -22,9 +22,11 @@ from simulator.scene import build_scene
 pytestmark = pytest.mark.slow
 
 # Light: a coarse scene and sensors; every topic is advertised all the same.
-SIM = SimConfig(scene=SceneConfig(terrain_cells=40, trees=4, houses=2),
-                lidar=LidarConfig(horizontal_resolution_deg=4.0, vertical_resolution_deg=4.0),
-                camera=CameraConfig(width_px=80, height_px=60))
+SIM = SimConfig(
+    scene=SceneConfig(terrain_cells=40, trees=4, houses=2),
+    lidar=LidarConfig(horizontal_resolution_deg=4.0, vertical_resolution_deg=4.0),
+    camera=CameraConfig(width_px=80, height_px=60),
+)
 NAV = NavigationConfig(lidar=NavLidarConfig(worker="thread"))
 TIMEOUT_S = 30.0
 TELEMETRY = {t.name for t in published_by("every process")}
@@ -61,8 +63,10 @@ async def observe_stack() -> dict[str, Any]:
     and publishers."""
     scene = await asyncio.to_thread(build_scene, SIM.scene, seed=SIM.seed)
     stop = asyncio.Event()
-    async with (run_bridge(BridgeConfig(host="127.0.0.1", port=0)) as bridge,
-                RosbridgeClient(bridge.url, name="judge") as judge):
+    async with (
+        run_bridge(BridgeConfig(host="127.0.0.1", port=0)) as bridge,
+        RosbridgeClient(bridge.url, name="judge") as judge,
+    ):
         before = await node_names(judge)
         tasks = [asyncio.create_task(serve_simulator(bridge.url, SIM, stop, scene=scene))]
         try:
@@ -71,15 +75,19 @@ async def observe_stack() -> dict[str, Any]:
             tasks.append(asyncio.create_task(serve_navigation(bridge.url, NAV, stop)))
             await until_listed(judge, {t.name for t in published_by("navigation")})
             nav_nodes = await node_names(judge) - before - sim_nodes
-            observed = {"simulator": await graph_of(judge, sim_nodes),
-                        "navigation": await graph_of(judge, nav_nodes),
-                        "nodes": {"simulator": sim_nodes, "navigation": nav_nodes}}
+            observed = {
+                "simulator": await graph_of(judge, sim_nodes),
+                "navigation": await graph_of(judge, nav_nodes),
+                "nodes": {"simulator": sim_nodes, "navigation": nav_nodes},
+            }
             names = {t.name for p in ("simulator", "navigation") for t in published_by(p)}
-            observed["types"] = {name: (await rosapi(judge, "topic_type", topic=name))["type"]
-                                 for name in names}
+            observed["types"] = {
+                name: (await rosapi(judge, "topic_type", topic=name))["type"] for name in names
+            }
             observed["publishers"] = {
                 name: set((await rosapi(judge, "publishers", topic=name))["publishers"])
-                for name in names}
+                for name in names
+            }
         finally:
             stop.set()
             await asyncio.gather(*tasks)

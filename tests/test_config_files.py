@@ -22,8 +22,10 @@ CITED = re.compile(r"#.*#\s*(.*\b(thesis|ours|unset|standard)\b.*)$")
 
 def uncommented(path: Path) -> str:
     """The file with its commented-out settings and table headers switched on."""
-    return "\n".join(line[2:] if SETTING.match(line) else line
-                     for line in path.read_text(encoding="utf-8").splitlines())
+    return "\n".join(
+        line[2:] if SETTING.match(line) else line
+        for line in path.read_text(encoding="utf-8").splitlines()
+    )
 
 
 def dotted(table: dict[str, Any], prefix: str = "") -> dict[str, Any]:

@@ -34,22 +34,36 @@ def split_node_name(node: str) -> tuple[str, str]:
     return namespace or "/", name
 
 
-def participant_entities(participant: bytes, node: str, readers: Sequence[bytes],
-                         writers: Sequence[bytes]) -> Message:
+def participant_entities(
+    participant: bytes, node: str, readers: Sequence[bytes], writers: Sequence[bytes]
+) -> Message:
     """The canonical ParticipantEntitiesInfo announcing `node` with these endpoints."""
     namespace, name = split_node_name(node)
-    return {"gid": {"data": participant},
-            "node_entities_info_seq": [{
-                "node_namespace": namespace, "node_name": name,
+    return {
+        "gid": {"data": participant},
+        "node_entities_info_seq": [
+            {
+                "node_namespace": namespace,
+                "node_name": name,
                 "reader_gid_seq": [{"data": guid} for guid in readers],
-                "writer_gid_seq": [{"data": guid} for guid in writers]}]}
+                "writer_gid_seq": [{"data": guid} for guid in writers],
+            }
+        ],
+    }
 
 
 class Announcer:
     """Publishes the bridge's node and reports other participants' nodes."""
 
-    def __init__(self, participant: DdsParticipant, pump: Pump, outbox: Outbox,
-                 registry: TypeRegistry, node: str, on_nodes: NodeUpdate) -> None:
+    def __init__(
+        self,
+        participant: DdsParticipant,
+        pump: Pump,
+        outbox: Outbox,
+        registry: TypeRegistry,
+        node: str,
+        on_nodes: NodeUpdate,
+    ) -> None:
         self._participant = participant
         self._registry = registry
         self._outbox = outbox
@@ -59,8 +73,9 @@ class Announcer:
         user_data = type_hash_user_data(registry, DISCOVERY_TYPE)
         self._writer = participant.writer(DISCOVERY_TOPIC, data_type, DISCOVERY, user_data)
         # rmw_cyclonedds reads it keep-all; any depth works as each participant sends its own.
-        self._reader = participant.reader(DISCOVERY_TOPIC, data_type,
-                                          QosProfile(transient_local=True, depth=0), user_data)
+        self._reader = participant.reader(
+            DISCOVERY_TOPIC, data_type, QosProfile(transient_local=True, depth=0), user_data
+        )
         pump.watch(self._reader.condition, self._take)
         self._pump = pump
         self._last: tuple[tuple[bytes, ...], tuple[bytes, ...]] | None = None
@@ -71,8 +86,7 @@ class Announcer:
     def announce(self, readers: Sequence[bytes], writers: Sequence[bytes]) -> None:
         """Publish the node's endpoints (its own discovery endpoints included) if changed."""
         own_readers, own_writers = self.own_endpoints()
-        current = (tuple(sorted([*own_readers, *readers])),
-                   tuple(sorted([*own_writers, *writers])))
+        current = (tuple(sorted([*own_readers, *readers])), tuple(sorted([*own_writers, *writers])))
         if current == self._last:
             return
         self._last = current

@@ -52,8 +52,9 @@ class CycloneSettings:
             if not _ADDRESS.match(peer):
                 raise ValueError(f"dds peer {peer!r} is not an address")
         if self.multicast not in MULTICAST_MODES:
-            raise ValueError(f"dds multicast must be one of {MULTICAST_MODES}, "
-                             f"got {self.multicast!r}")
+            raise ValueError(
+                f"dds multicast must be one of {MULTICAST_MODES}, got {self.multicast!r}"
+            )
 
     def effective_peers(self) -> tuple[str, ...]:
         if self.peers or self.interface != LOOPBACK:

@@ -80,12 +80,18 @@ def participant_node(participant: bytes) -> str:
 
 def nodes_from_discovery_info(msg: Message) -> tuple[bytes, tuple[NodeEntities, ...]]:
     """(participant gid, its nodes) from a canonical `ParticipantEntitiesInfo` message."""
+
     def gids(items: Iterable[Message]) -> frozenset[bytes]:
         return frozenset(bytes(item["data"]) for item in items)
 
-    nodes = tuple(NodeEntities(node_name(n["node_namespace"], n["node_name"]),
-                               gids(n["reader_gid_seq"]), gids(n["writer_gid_seq"]))
-                  for n in msg["node_entities_info_seq"])
+    nodes = tuple(
+        NodeEntities(
+            node_name(n["node_namespace"], n["node_name"]),
+            gids(n["reader_gid_seq"]),
+            gids(n["writer_gid_seq"]),
+        )
+        for n in msg["node_entities_info_seq"]
+    )
     return bytes(msg["gid"]["data"]), nodes
 
 

@@ -29,8 +29,7 @@ class GraphSync:
         self.subscribers: set[tuple[str, str]] = set()
         self._conflicts: set[tuple[str, str]] = set()
 
-    def apply(self, graph: Graph, topics: dict[str, RemoteTopic],
-              local_nodes: set[str]) -> None:
+    def apply(self, graph: Graph, topics: dict[str, RemoteTopic], local_nodes: set[str]) -> None:
         """Make the graph's remote endpoints those of `topics`; never touch `local_nodes`'."""
         wanted_pubs = {(t.name, n) for t in topics.values() for n in t.publishers}
         wanted_subs = {(t.name, n) for t in topics.values() for n in t.subscribers}

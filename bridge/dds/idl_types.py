@@ -32,10 +32,20 @@ _sequence: Any = idl.sequence
 _bounded_str: Any = idl.bounded_str
 
 PRIMITIVES: dict[str, Any] = {
-    "bool": bool, "byte": idl.byte, "char": idl.uint8,
-    "int8": idl.int8, "uint8": idl.uint8, "int16": idl.int16, "uint16": idl.uint16,
-    "int32": idl.int32, "uint32": idl.uint32, "int64": idl.int64, "uint64": idl.uint64,
-    "float32": idl.float32, "float64": idl.float64, "string": str,
+    "bool": bool,
+    "byte": idl.byte,
+    "char": idl.uint8,
+    "int8": idl.int8,
+    "uint8": idl.uint8,
+    "int16": idl.int16,
+    "uint16": idl.uint16,
+    "int32": idl.int32,
+    "uint32": idl.uint32,
+    "int64": idl.int64,
+    "uint64": idl.uint64,
+    "float32": idl.float32,
+    "float64": idl.float64,
+    "string": str,
 }
 EMPTY_PLACEHOLDER = "structure_needs_at_least_one_member"
 # rmw_cyclonedds_cpp's cdds_request_header_t, under its member names (peers that send XTypes
@@ -72,14 +82,16 @@ class IdlTypes:
         fields: dict[str, Any] = dict(REQUEST_HEADER_FIELDS) if with_request_header else {}
         for field in spec.fields:
             if field.name in fields:
-                raise UnsupportedTypeError(f"{spec.name} has a field {field.name} that clashes "
-                                           "with the request header")
+                raise UnsupportedTypeError(
+                    f"{spec.name} has a field {field.name} that clashes with the request header"
+                )
             fields[field.name] = self._field_type(field)
         if not spec.fields:
             fields[EMPTY_PLACEHOLDER] = idl.uint8
         dds_name = type_to_dds(spec.name)
-        class_name = dds_name.replace("::", "_") + ("_with_request_header" if with_request_header
-                                                    else "")
+        class_name = dds_name.replace("::", "_") + (
+            "_with_request_header" if with_request_header else ""
+        )
         built = make_idl_struct(class_name, dds_name, fields)
         self._classes[key] = built
         return built
@@ -94,7 +106,8 @@ class IdlTypes:
             element = PRIMITIVES[field.base]
         else:
             raise UnsupportedTypeError(
-                f"field {field.name} of type {field.base} has no DDS mapping here")
+                f"field {field.name} of type {field.base} has no DDS mapping here"
+            )
         if field.array == "fixed":
             return _array[element, field.length]
         if field.array == "bounded":

@@ -74,15 +74,18 @@ class DdsMirror:
 
     async def start(self) -> None:
         loop = self._loop = asyncio.get_running_loop()
-        settings = CycloneSettings(self.config.dds_interface, self.config.dds_peers,
-                                   self.config.dds_multicast)
+        settings = CycloneSettings(
+            self.config.dds_interface, self.config.dds_peers, self.config.dds_multicast
+        )
         try:
-            self.participant = DdsParticipant(self.config.dds_domain, settings,
-                                              self.config.dds_tuned)
+            self.participant = DdsParticipant(
+                self.config.dds_domain, settings, self.config.dds_tuned
+            )
         except Exception as exc:  # Cyclone says little more than "non-specific error"
             raise DdsStartError(
                 f"cannot join DDS domain {self.config.dds_domain} on interface "
-                f"{settings.interface!r} (does it exist and have an address?): {exc}") from exc
+                f"{settings.interface!r} (does it exist and have an address?): {exc}"
+            ) from exc
         try:
             self._assemble(loop)
         except Exception as exc:  # e.g. a type Cyclone refuses: leave the domain again
@@ -92,10 +95,14 @@ class DdsMirror:
         self.writer.start()
         self.pump.start()
         self._task = asyncio.create_task(self._reconcile_forever(), name="bridge-dds")
-        logger.info("DDS: domain %d on interface %s (peers %s, multicast %s) as node %s",
-                    self.config.dds_domain, settings.interface,
-                    ", ".join(settings.effective_peers()) or "none", settings.multicast,
-                    self.node)
+        logger.info(
+            "DDS: domain %d on interface %s (peers %s, multicast %s) as node %s",
+            self.config.dds_domain,
+            settings.interface,
+            ", ".join(settings.effective_peers()) or "none",
+            settings.multicast,
+            self.node,
+        )
 
     def _assemble(self, loop: asyncio.AbstractEventLoop) -> None:
         """The mirror's parts on the joined participant (no thread started yet)."""
@@ -105,13 +112,32 @@ class DdsMirror:
         self.writer = WriterThread(self.outbox)
         self.pump = Pump(self.participant)
         to_loop = loop.call_soon_threadsafe
-        self.topics = TopicMirror(self.participant, self.pump, self.outbox, self.registry,
-                                  lambda arrivals: to_loop(self._inject, arrivals))
-        self.services = ServiceMirror(self.core, self.server.apply, self.server.internal_clients,
-                                      self.participant, self.pump, self.outbox, self.registry,
-                                      self.node, to_loop)
-        self.announcer = Announcer(self.participant, self.pump, self.outbox, self.registry,
-                                   self.node, lambda p, n: to_loop(self._nodes_seen, p, n))
+        self.topics = TopicMirror(
+            self.participant,
+            self.pump,
+            self.outbox,
+            self.registry,
+            lambda arrivals: to_loop(self._inject, arrivals),
+        )
+        self.services = ServiceMirror(
+            self.core,
+            self.server.apply,
+            self.server.internal_clients,
+            self.participant,
+            self.pump,
+            self.outbox,
+            self.registry,
+            self.node,
+            to_loop,
+        )
+        self.announcer = Announcer(
+            self.participant,
+            self.pump,
+            self.outbox,
+            self.registry,
+            self.node,
+            lambda p, n: to_loop(self._nodes_seen, p, n),
+        )
         for condition in self.participant.discovery_conditions:
             self.pump.watch(condition, self._take_discovery)
 
@@ -158,9 +184,15 @@ class DdsMirror:
             latch = reader is not None and reader.wanted.profile.transient_local
             self._injecting = True
             try:
-                effects = self.core.publish_external(node, arrival.topic, arrival.type_name,
-                                                     arrival.msg, time.time_ns(), arrival.cdr,
-                                                     latch=latch)
+                effects = self.core.publish_external(
+                    node,
+                    arrival.topic,
+                    arrival.type_name,
+                    arrival.msg,
+                    time.time_ns(),
+                    arrival.cdr,
+                    latch=latch,
+                )
             except (BridgeError, SchemaError) as exc:
                 logger.warning("DDS: sample on %s not published: %s", arrival.topic, exc)
                 continue
@@ -176,6 +208,7 @@ class DdsMirror:
 
         def seen() -> None:
             self._loop.call_soon_threadsafe(self._snapshot_seen, snapshot)
+
         return seen
 
     def _snapshot_seen(self, snapshot: Snapshot) -> None:
@@ -211,15 +244,21 @@ class DdsMirror:
         self._waiting_first.clear()
         self.graph_sync.apply(state.graph, remote_topics, local)
         state.external_nodes = self.view.announced_nodes()
-        provided = {name: entry.type_name for name, entry in state.graph.services.items()
-                    if entry.provider in local and entry.type_name}
+        provided = {
+            name: entry.type_name
+            for name, entry in state.graph.services.items()
+            if entry.provider in local and entry.type_name
+        }
         self.services.sync(provided, self.view.services())
         topic_readers, topic_writers = self.topics.endpoint_guids()
         service_readers, service_writers = self.services.guids()
         self.announcer.announce(topic_readers + service_readers, topic_writers + service_writers)
 
-    def _wanted_topics(self, local: set[str], remote: dict[str, RemoteTopic],
-                       ) -> tuple[dict[str, Wanted], dict[str, Wanted]]:
+    def _wanted_topics(
+        self,
+        local: set[str],
+        remote: dict[str, RemoteTopic],
+    ) -> tuple[dict[str, Wanted], dict[str, Wanted]]:
         writers: dict[str, Wanted] = {}
         readers: dict[str, Wanted] = {}
         for entry in self.core.state.graph.topics.values():
@@ -239,6 +278,10 @@ class DdsMirror:
         profile, problem = advertised_profile(node in entry.latching, entry.qos.get(node))
         if problem and (entry.name, node) not in self._qos_warned:
             self._qos_warned.add((entry.name, node))
-            logger.warning("[%s] op=advertise topic=%s: %s; the DDS writer takes ROS 2's "
-                           "default QoS", node, entry.name, problem)
+            logger.warning(
+                "[%s] op=advertise topic=%s: %s; the DDS writer takes ROS 2's default QoS",
+                node,
+                entry.name,
+                problem,
+            )
         return profile

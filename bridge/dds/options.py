@@ -38,9 +38,12 @@ def env_defaults(env: Mapping[str, str]) -> dict[str, Any]:
         domain = domain_id(env.get("ROS_DOMAIN_ID", "0").strip() or "0")
     except argparse.ArgumentTypeError as exc:
         raise ValueError(f"ROS_DOMAIN_ID {exc}") from None
-    return {"dds": flag in _TRUE, "domain": domain,
-            "dds_interface": env.get("RIVERBRIDGE_DDS_INTERFACE", "").strip() or "lo",
-            "dds_peer": list(peers_from_text([env.get("RIVERBRIDGE_DDS_PEERS", "")]))}
+    return {
+        "dds": flag in _TRUE,
+        "domain": domain,
+        "dds_interface": env.get("RIVERBRIDGE_DDS_INTERFACE", "").strip() or "lo",
+        "dds_peer": list(peers_from_text([env.get("RIVERBRIDGE_DDS_PEERS", "")])),
+    }
 
 
 def add_dds_options(parser: argparse.ArgumentParser, env: Mapping[str, str] | None = None) -> None:
@@ -50,38 +53,74 @@ def add_dds_options(parser: argparse.ArgumentParser, env: Mapping[str, str] | No
     except ValueError as exc:
         parser.error(str(exc))
     group = parser.add_argument_group("ROS 2 over DDS (docs/ros2.md)")
-    group.add_argument("--dds", action="store_true", default=defaults["dds"],
-                       help="join a ROS 2 DDS domain with Cyclone DDS and mirror topics and "
-                            "services both ways ($RIVERBRIDGE_DDS)")
-    group.add_argument("--domain", type=domain_id, default=defaults["domain"], metavar="N",
-                       help=f"DDS domain id 0..{MAX_DOMAIN} (default $ROS_DOMAIN_ID or 0; "
-                            "now %(default)s)")
-    group.add_argument("--dds-interface", default=defaults["dds_interface"], metavar="NAME",
-                       help="the only network interface DDS may use (default %(default)s; "
-                            "$RIVERBRIDGE_DDS_INTERFACE)")
-    group.add_argument("--dds-peer", action="append", default=None, metavar="ADDR",
-                       help="unicast discovery peer, repeatable or comma-separated (default "
-                            "$RIVERBRIDGE_DDS_PEERS, else 127.0.0.1 on lo)")
+    group.add_argument(
+        "--dds",
+        action="store_true",
+        default=defaults["dds"],
+        help="join a ROS 2 DDS domain with Cyclone DDS and mirror topics and "
+        "services both ways ($RIVERBRIDGE_DDS)",
+    )
+    group.add_argument(
+        "--domain",
+        type=domain_id,
+        default=defaults["domain"],
+        metavar="N",
+        help=f"DDS domain id 0..{MAX_DOMAIN} (default $ROS_DOMAIN_ID or 0; now %(default)s)",
+    )
+    group.add_argument(
+        "--dds-interface",
+        default=defaults["dds_interface"],
+        metavar="NAME",
+        help="the only network interface DDS may use (default %(default)s; "
+        "$RIVERBRIDGE_DDS_INTERFACE)",
+    )
+    group.add_argument(
+        "--dds-peer",
+        action="append",
+        default=None,
+        metavar="ADDR",
+        help="unicast discovery peer, repeatable or comma-separated (default "
+        "$RIVERBRIDGE_DDS_PEERS, else 127.0.0.1 on lo)",
+    )
     parser.set_defaults(dds_env_peers=defaults["dds_peer"])
-    group.add_argument("--dds-multicast", choices=MULTICAST_MODES, default="false",
-                       help="multicast on that interface: false, spdp (discovery only) or true "
-                            "(default %(default)s)")
-    group.add_argument("--dds-node", default="", metavar="NAME",
-                       help="the bridge's ROS 2 node name on the domain "
-                            "(default /riverbridge_<id>)")
-    group.add_argument("--dds-untuned", action="store_true",
-                       help="Cyclone's own socket buffers and writer cache limits instead of "
-                            "the bridge's large-sample settings (to measure them)")
-    group.add_argument("--print-dds-config", action="store_true",
-                       help="print the Cyclone DDS XML these options give (for CYCLONEDDS_URI "
-                            "of ROS 2 nodes that should meet the bridge) and exit")
+    group.add_argument(
+        "--dds-multicast",
+        choices=MULTICAST_MODES,
+        default="false",
+        help="multicast on that interface: false, spdp (discovery only) or true "
+        "(default %(default)s)",
+    )
+    group.add_argument(
+        "--dds-node",
+        default="",
+        metavar="NAME",
+        help="the bridge's ROS 2 node name on the domain (default /riverbridge_<id>)",
+    )
+    group.add_argument(
+        "--dds-untuned",
+        action="store_true",
+        help="Cyclone's own socket buffers and writer cache limits instead of "
+        "the bridge's large-sample settings (to measure them)",
+    )
+    group.add_argument(
+        "--print-dds-config",
+        action="store_true",
+        help="print the Cyclone DDS XML these options give (for CYCLONEDDS_URI "
+        "of ROS 2 nodes that should meet the bridge) and exit",
+    )
 
 
 def dds_config_fields(args: argparse.Namespace) -> dict[str, Any]:
     """The BridgeConfig fields of the parsed DDS options."""
-    return {"dds": args.dds, "dds_domain": args.domain, "dds_interface": args.dds_interface,
-            "dds_peers": peers(args), "dds_multicast": args.dds_multicast,
-            "dds_node": args.dds_node, "dds_tuned": not args.dds_untuned}
+    return {
+        "dds": args.dds,
+        "dds_domain": args.domain,
+        "dds_interface": args.dds_interface,
+        "dds_peers": peers(args),
+        "dds_multicast": args.dds_multicast,
+        "dds_node": args.dds_node,
+        "dds_tuned": not args.dds_untuned,
+    }
 
 
 def peers(args: argparse.Namespace) -> tuple[str, ...]:

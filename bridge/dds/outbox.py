@@ -47,8 +47,9 @@ class Outbox:
         """Queue `job` (carrying about `size` payload bytes) on stream `key`."""
         with self._ready:
             stream = self._streams.setdefault(key, _Stream())
-            while stream.items and (stream.items >= self.max_items
-                                    or stream.size + size > self.max_bytes):
+            while stream.items and (
+                stream.items >= self.max_items or stream.size + size > self.max_bytes
+            ):
                 self._drop_oldest(key, stream)
             self._items.append((key, job, size))
             stream.items += 1
@@ -99,8 +100,7 @@ class WriterThread:
 
     def __init__(self, outbox: Outbox) -> None:
         self.outbox = outbox
-        self._thread = threading.Thread(target=self._run, name="bridge-dds-writer",
-                                        daemon=True)
+        self._thread = threading.Thread(target=self._run, name="bridge-dds-writer", daemon=True)
 
     def start(self) -> None:
         self._thread.start()

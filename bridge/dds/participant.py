@@ -67,8 +67,12 @@ PUMP_WAIT_NS = 500_000_000
 TAKE_LIMIT = 256  # samples per reader per wake-up
 _ANY = SampleState.Any | ViewState.Any | InstanceState.Any
 _ALIVE = SampleState.Any | ViewState.Any | InstanceState.Alive
-_NOT_ALIVE = (SampleState.Any | ViewState.Any | InstanceState.NotAliveDisposed
-              | InstanceState.NotAliveNoWriters)
+_NOT_ALIVE = (
+    SampleState.Any
+    | ViewState.Any
+    | InstanceState.NotAliveDisposed
+    | InstanceState.NotAliveNoWriters
+)
 
 
 class _SampleContainer(ctypes.Structure):
@@ -88,13 +92,14 @@ class RawSample:
 
 def cyclone_qos(profile: QosProfile, user_data: str = "", writer: bool = False) -> Qos:
     """ROS 2's QoS for an endpoint, the way rmw_cyclonedds_cpp sets it."""
-    history = Policy.History.KeepAll if profile.depth == 0 else Policy.History.KeepLast(
-        profile.depth)
+    history = (
+        Policy.History.KeepAll if profile.depth == 0 else Policy.History.KeepLast(profile.depth)
+    )
     policies: list[Any] = [
-        Policy.Reliability.Reliable(MAX_BLOCKING_NS) if profile.reliable
+        Policy.Reliability.Reliable(MAX_BLOCKING_NS)
+        if profile.reliable
         else Policy.Reliability.BestEffort,
-        Policy.Durability.TransientLocal if profile.transient_local
-        else Policy.Durability.Volatile,
+        Policy.Durability.TransientLocal if profile.transient_local else Policy.Durability.Volatile,
         history,
     ]
     if writer:
@@ -110,12 +115,17 @@ def profile_of(qos: Qos | None) -> QosProfile:
     """The ROS view of a discovered endpoint's QoS (DDS defaults where a policy is absent)."""
     if qos is None:
         return QosProfile()
-    reliability, durability, history = (qos[Policy.Reliability], qos[Policy.Durability],
-                                        qos[Policy.History])
+    reliability, durability, history = (
+        qos[Policy.Reliability],
+        qos[Policy.Durability],
+        qos[Policy.History],
+    )
     depth = 0 if history == Policy.History.KeepAll else getattr(history, "depth", 1)
-    return QosProfile(reliable=isinstance(reliability, Policy.Reliability.Reliable),
-                      transient_local=durability not in (None, Policy.Durability.Volatile),
-                      depth=depth)
+    return QosProfile(
+        reliable=isinstance(reliability, Policy.Reliability.Reliable),
+        transient_local=durability not in (None, Policy.Durability.Volatile),
+        depth=depth,
+    )
 
 
 def user_data_of(qos: Qos | None) -> str:
@@ -145,15 +155,19 @@ class RawReader:
     def __init__(self, entity: DataReader[IdlStruct]) -> None:
         self.entity = entity
         self.guid = entity.guid.bytes
-        self.condition = ReadCondition(entity, SampleState.NotRead | ViewState.Any
-                                       | InstanceState.Any)
+        self.condition = ReadCondition(
+            entity, SampleState.NotRead | ViewState.Any | InstanceState.Any
+        )
 
     def take(self) -> list[RawSample]:
         taken = ddspy_take(self.entity._ref, _ANY, TAKE_LIMIT)
         if isinstance(taken, int):
             raise RuntimeError(f"dds_take failed with {taken}")
-        return [RawSample(data, info.publication_handle, info.source_timestamp)
-                for data, info in taken if info.valid_data]
+        return [
+            RawSample(data, info.publication_handle, info.source_timestamp)
+            for data, info in taken
+            if info.valid_data
+        ]
 
     def writer_guid(self, publication_handle: int) -> bytes | None:
         """The GUID of the matched remote writer `publication_handle`, if still matched."""
@@ -178,8 +192,9 @@ class _Domains:
             if held is None:
                 held = (Domain(domain_id, xml), xml, 0)
             elif held[1] != xml:
-                raise ValueError(f"DDS domain {domain_id} is already configured differently "
-                                 "in this process")
+                raise ValueError(
+                    f"DDS domain {domain_id} is already configured differently in this process"
+                )
             self._held[domain_id] = (held[0], held[1], held[2] + 1)
             return held[0]
 
@@ -205,7 +220,8 @@ class DdsParticipant:
         self._domain = DOMAINS.acquire(domain_id, cyclone_xml(settings, tuned))
         try:
             self.participant = DomainParticipant(
-                domain_id, qos=Qos(Policy.Userdata(data=b"enclave=/;")))
+                domain_id, qos=Qos(Policy.Userdata(data=b"enclave=/;"))
+            )
         except Exception:
             DOMAINS.release(domain_id)
             raise
@@ -217,12 +233,17 @@ class DdsParticipant:
         self._topics: dict[str, Topic[IdlStruct]] = {}
         self._lock = threading.Lock()
         self._discovery = [
-            BuiltinDataReader(self.participant, topic) for topic in
-            (BuiltinTopicDcpsParticipant, BuiltinTopicDcpsPublication,
-             BuiltinTopicDcpsSubscription)]
-        self.discovery_conditions = [ReadCondition(r, SampleState.NotRead | ViewState.Any
-                                                   | InstanceState.Any)
-                                     for r in self._discovery]
+            BuiltinDataReader(self.participant, topic)
+            for topic in (
+                BuiltinTopicDcpsParticipant,
+                BuiltinTopicDcpsPublication,
+                BuiltinTopicDcpsSubscription,
+            )
+        ]
+        self.discovery_conditions = [
+            ReadCondition(r, SampleState.NotRead | ViewState.Any | InstanceState.Any)
+            for r in self._discovery
+        ]
         self._alive = [ReadCondition(r, _ALIVE) for r in self._discovery]
         self._gone = [ReadCondition(r, _NOT_ALIVE) for r in self._discovery]
 
@@ -237,14 +258,17 @@ class DdsParticipant:
                 topic = self._topics[dds_name] = Topic(self.participant, dds_name, data_type)
             return topic
 
-    def writer(self, dds_name: str, data_type: type, profile: QosProfile,
-               user_data: str = "") -> RawWriter:
+    def writer(
+        self, dds_name: str, data_type: type, profile: QosProfile, user_data: str = ""
+    ) -> RawWriter:
         topic = self.topic(dds_name, data_type)
-        return RawWriter(DataWriter(self.publisher, topic,
-                                    cyclone_qos(profile, user_data, writer=True)))
+        return RawWriter(
+            DataWriter(self.publisher, topic, cyclone_qos(profile, user_data, writer=True))
+        )
 
-    def reader(self, dds_name: str, data_type: type, profile: QosProfile,
-               user_data: str = "") -> RawReader:
+    def reader(
+        self, dds_name: str, data_type: type, profile: QosProfile, user_data: str = ""
+    ) -> RawReader:
         topic = self.topic(dds_name, data_type)
         return RawReader(DataReader(self.subscriber, topic, cyclone_qos(profile, user_data)))
 
@@ -257,8 +281,9 @@ class DdsParticipant:
         """Every remote participant and endpoint alive now (ours left out)."""
         for reader, gone in zip(self._discovery, self._gone, strict=True):
             reader.take(N=1_000_000, condition=gone)
-        participants = {p.key.bytes for p in self._discovery[0].read(
-            N=1_000_000, condition=self._alive[0])}
+        participants = {
+            p.key.bytes for p in self._discovery[0].read(N=1_000_000, condition=self._alive[0])
+        }
         participants.discard(self.guid)
         endpoints = []
         for index, is_writer in ((1, True), (2, False)):
@@ -266,10 +291,17 @@ class DdsParticipant:
             for sample in reader.read(N=1_000_000, condition=alive):
                 if sample.participant_key.bytes == self.guid:
                     continue
-                endpoints.append(Endpoint(
-                    sample.key.bytes, sample.participant_key.bytes, sample.topic_name,
-                    sample.type_name, is_writer, profile_of(sample.qos),
-                    user_data_of(sample.qos)))
+                endpoints.append(
+                    Endpoint(
+                        sample.key.bytes,
+                        sample.participant_key.bytes,
+                        sample.topic_name,
+                        sample.type_name,
+                        is_writer,
+                        profile_of(sample.qos),
+                        user_data_of(sample.qos),
+                    )
+                )
         return Snapshot(frozenset(participants), tuple(endpoints))
 
     def close(self) -> None:

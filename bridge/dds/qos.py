@@ -25,8 +25,10 @@ class QosProfile:
 
     def describe(self) -> str:
         history = "keep-all" if self.depth == 0 else f"keep-last {self.depth}"
-        return (f"{'reliable' if self.reliable else 'best-effort'}, "
-                f"{'transient-local' if self.transient_local else 'volatile'}, {history}")
+        return (
+            f"{'reliable' if self.reliable else 'best-effort'}, "
+            f"{'transient-local' if self.transient_local else 'volatile'}, {history}"
+        )
 
 
 # rmw_qos_profile_default: what rclcpp/rclpy publishers and subscriptions use unless told.
@@ -40,10 +42,18 @@ SERVICES = QosProfile()
 # rmw_dds_common's ros_discovery_info: reliable, transient-local, keep-last 1.
 DISCOVERY = QosProfile(transient_local=True, depth=1)
 
-_RELIABILITY = {"reliable": True, "best_effort": False, "best_available": True,
-                "system_default": True}
-_DURABILITY = {"transient_local": True, "volatile": False, "best_available": True,
-               "system_default": False}
+_RELIABILITY = {
+    "reliable": True,
+    "best_effort": False,
+    "best_available": True,
+    "system_default": True,
+}
+_DURABILITY = {
+    "transient_local": True,
+    "volatile": False,
+    "best_available": True,
+    "system_default": False,
+}
 
 
 class QosError(ValueError):
@@ -96,9 +106,11 @@ READER_DEPTH = 64
 def reader_profile(writers: Iterable[QosProfile]) -> QosProfile:
     """A reader profile that matches every writer in `writers` (reliable, volatile if none)."""
     known = list(writers)
-    return QosProfile(reliable=all(w.reliable for w in known),
-                      transient_local=bool(known) and all(w.transient_local for w in known),
-                      depth=READER_DEPTH)
+    return QosProfile(
+        reliable=all(w.reliable for w in known),
+        transient_local=bool(known) and all(w.transient_local for w in known),
+        depth=READER_DEPTH,
+    )
 
 
 def strongest(profiles: Iterable[QosProfile]) -> QosProfile:
@@ -107,6 +119,8 @@ def strongest(profiles: Iterable[QosProfile]) -> QosProfile:
     if not chosen:
         return DEFAULT
     depths = [p.depth for p in chosen]
-    return QosProfile(reliable=any(p.reliable for p in chosen),
-                      transient_local=any(p.transient_local for p in chosen),
-                      depth=0 if 0 in depths else max(depths))
+    return QosProfile(
+        reliable=any(p.reliable for p in chosen),
+        transient_local=any(p.transient_local for p in chosen),
+        depth=0 if 0 in depths else max(depths),
+    )

@@ -41,7 +41,7 @@ def unwrap(sample: bytes) -> tuple[RequestId, bytes]:
     head = sample[:ENCAPSULATION_BYTES]
     unpacker = _LITTLE if _is_little(head) else _BIG
     guid, sequence = unpacker.unpack_from(sample, ENCAPSULATION_BYTES)
-    return RequestId(guid, sequence), head + sample[ENCAPSULATION_BYTES + HEADER_BYTES:]
+    return RequestId(guid, sequence), head + sample[ENCAPSULATION_BYTES + HEADER_BYTES :]
 
 
 def _is_little(encapsulation: bytes) -> bool:

@@ -39,9 +39,17 @@ def pairing_id(participant_guid: bytes, number: int) -> str:
 class _ServiceEndpoints:
     """The writer and reader of one side of a service, and the types they carry."""
 
-    def __init__(self, participant: DdsParticipant, pump: Pump, outbox: Outbox,
-                 registry: TypeRegistry, service: str, type_name: str, is_server: bool,
-                 received: Received) -> None:
+    def __init__(
+        self,
+        participant: DdsParticipant,
+        pump: Pump,
+        outbox: Outbox,
+        registry: TypeRegistry,
+        service: str,
+        type_name: str,
+        is_server: bool,
+        received: Received,
+    ) -> None:
         spec = registry.service(type_name)
         self.service = service
         self.type_name = spec.name
@@ -50,24 +58,38 @@ class _ServiceEndpoints:
         self._pump = pump
         self._participant = participant
         self._received = received  # called on the pump thread
-        outgoing, incoming = (spec.response, spec.request) if is_server else (spec.request,
-                                                                              spec.response)
+        outgoing, incoming = (
+            (spec.response, spec.request) if is_server else (spec.request, spec.response)
+        )
         self._outgoing, self._incoming = outgoing.name, incoming.name
-        key = (("serviceid=" if is_server else "clientid=")
-               + pairing_id(participant.guid, next(participant.pairings)) + ";")
+        key = (
+            ("serviceid=" if is_server else "clientid=")
+            + pairing_id(participant.guid, next(participant.pairings))
+            + ";"
+        )
         types = participant.types
-        write_topic, read_topic = ((reply_topic(service), request_topic(service)) if is_server
-                                   else (request_topic(service), reply_topic(service)))
+        write_topic, read_topic = (
+            (reply_topic(service), request_topic(service))
+            if is_server
+            else (request_topic(service), reply_topic(service))
+        )
         self.writer: RawWriter = participant.writer(
-            write_topic, types.service_part(outgoing), SERVICES,
-            key + type_hash_user_data(registry, outgoing.name))
+            write_topic,
+            types.service_part(outgoing),
+            SERVICES,
+            key + type_hash_user_data(registry, outgoing.name),
+        )
         self.reader: RawReader = participant.reader(
-            read_topic, types.service_part(incoming), SERVICES,
-            key + type_hash_user_data(registry, incoming.name))
+            read_topic,
+            types.service_part(incoming),
+            SERVICES,
+            key + type_hash_user_data(registry, incoming.name),
+        )
         pump.watch(self.reader.condition, self._take)
 
     def send(self, request: RequestId, msg: Message) -> None:
         """Queue a request or reply (serialized and written on the writer thread)."""
+
         def write() -> None:
             cdr = request_header.wrap(to_cdr(self._registry, self._outgoing, msg), request)
             result = self.writer.write(cdr)
@@ -89,8 +111,9 @@ class _ServiceEndpoints:
                 try:
                     request, cdr = request_header.unwrap(sample.data)
                     if self.accepts(request):
-                        self._received(self.service, request,
-                                       from_cdr(self._registry, self._incoming, cdr))
+                        self._received(
+                            self.service, request, from_cdr(self._registry, self._incoming, cdr)
+                        )
                 except (SchemaError, ValueError) as exc:
                     logger.warning("DDS: dropped a sample of service %s: %s", self.service, exc)
 
@@ -109,21 +132,33 @@ class _ServiceEndpoints:
 class ServiceServer(_ServiceEndpoints):
     """A local provider's service offered on DDS: requests in, replies out."""
 
-    def __init__(self, participant: DdsParticipant, pump: Pump, outbox: Outbox,
-                 registry: TypeRegistry, service: str, type_name: str,
-                 on_request: Received) -> None:
-        super().__init__(participant, pump, outbox, registry, service, type_name, True,
-                         on_request)
+    def __init__(
+        self,
+        participant: DdsParticipant,
+        pump: Pump,
+        outbox: Outbox,
+        registry: TypeRegistry,
+        service: str,
+        type_name: str,
+        on_request: Received,
+    ) -> None:
+        super().__init__(participant, pump, outbox, registry, service, type_name, True, on_request)
 
 
 class ServiceClient(_ServiceEndpoints):
     """A remote server's service used by local callers: requests out, own replies in."""
 
-    def __init__(self, participant: DdsParticipant, pump: Pump, outbox: Outbox,
-                 registry: TypeRegistry, service: str, type_name: str,
-                 on_reply: Received) -> None:
-        super().__init__(participant, pump, outbox, registry, service, type_name, False,
-                         on_reply)
+    def __init__(
+        self,
+        participant: DdsParticipant,
+        pump: Pump,
+        outbox: Outbox,
+        registry: TypeRegistry,
+        service: str,
+        type_name: str,
+        on_reply: Received,
+    ) -> None:
+        super().__init__(participant, pump, outbox, registry, service, type_name, False, on_reply)
         self._sequence = itertools.count(1)
 
     def request(self, msg: Message) -> RequestId:

@@ -43,10 +43,18 @@ EndpointT = TypeVar("EndpointT", ServiceServer, ServiceClient)
 class ServiceMirror:
     """Keeps DDS service endpoints and stand-in clients in step with both graphs."""
 
-    def __init__(self, core: BridgeCore, apply: Apply,
-                 internal: dict[int, Callable[[Send], None]],
-                 participant: DdsParticipant, pump: Pump, outbox: Outbox,
-                 registry: TypeRegistry, node: str, to_loop: ToLoop) -> None:
+    def __init__(
+        self,
+        core: BridgeCore,
+        apply: Apply,
+        internal: dict[int, Callable[[Send], None]],
+        participant: DdsParticipant,
+        pump: Pump,
+        outbox: Outbox,
+        registry: TypeRegistry,
+        node: str,
+        to_loop: ToLoop,
+    ) -> None:
         self._core, self._apply, self._internal = core, apply, internal
         self._participant, self._pump, self._outbox = participant, pump, outbox
         self._registry, self._to_loop = registry, to_loop
@@ -86,11 +94,19 @@ class ServiceMirror:
                 changed |= self._adopt(service)
         return changed
 
-    def _open(self, kind: type[EndpointT], name: str, type_name: str,
-              received: Received) -> EndpointT | None:
+    def _open(
+        self, kind: type[EndpointT], name: str, type_name: str, received: Received
+    ) -> EndpointT | None:
         try:
-            return kind(self._participant, self._pump, self._outbox, self._registry, name,
-                        type_name, lambda *args: self._to_loop(received, *args))
+            return kind(
+                self._participant,
+                self._pump,
+                self._outbox,
+                self._registry,
+                name,
+                type_name,
+                lambda *args: self._to_loop(received, *args),
+            )
         except (SchemaError, ValueError) as exc:  # an unknown type, a Cyclone refusal
             if name not in self._refused:
                 self._refused.add(name)
@@ -99,8 +115,11 @@ class ServiceMirror:
 
     def _adopt(self, service: RemoteService) -> bool:
         """Advertise a remote server's service through a stand-in named like its node."""
-        if any(s.node == service.node for s in self._core.state.sessions.values()
-               if s.client_id not in self.client_ids):
+        if any(
+            s.node == service.node
+            for s in self._core.state.sessions.values()
+            if s.client_id not in self.client_ids
+        ):
             return False  # a websocket client has that node name; never impersonate it
         client = self._open(ServiceClient, service.name, service.type_name, self._on_reply)
         if client is None:
@@ -113,8 +132,10 @@ class ServiceMirror:
             self._internal[stand_in] = self._stand_in_receives
         self.clients[service.name] = client
         self._remote[service.name] = service
-        self._send(stand_in, {"op": "advertise_service", "service": service.name,
-                              "type": service.type_name})
+        self._send(
+            stand_in,
+            {"op": "advertise_service", "service": service.name, "type": service.type_name},
+        )
         return True
 
     def _withdraw(self, name: str) -> bool:
@@ -157,8 +178,9 @@ class ServiceMirror:
         self._calls += 1
         call_id = f"dds:{self._calls}"
         self._from_dds[call_id] = (server, request)
-        self._send(self.caller, {"op": "call_service", "service": service, "args": msg,
-                                 "id": call_id})
+        self._send(
+            self.caller, {"op": "call_service", "service": service, "args": msg, "id": call_id}
+        )
 
     def _caller_receives(self, send: Send) -> None:
         payload = send.item.payload if isinstance(send.item, ControlMessage) else {}
@@ -169,8 +191,11 @@ class ServiceMirror:
         if payload.get("result") is True and isinstance(payload.get("values"), dict):
             server.send(request, payload["values"])
         else:  # ROS 2 services have no error reply: the DDS client waits or times out
-            logger.warning("DDS: call to %s from DDS failed, no reply sent: %s",
-                           server.service, payload.get("values"))
+            logger.warning(
+                "DDS: call to %s from DDS failed, no reply sent: %s",
+                server.service,
+                payload.get("values"),
+            )
 
     # -- local callers using remote servers -------------------------------------------------
 
@@ -179,13 +204,17 @@ class ServiceMirror:
         if payload.get("op") != "call_service":
             return
         name = payload.get("service")
-        client = self.clients.get(name if isinstance(name, str) and name.startswith("/")
-                                  else f"/{name}")
+        client = self.clients.get(
+            name if isinstance(name, str) and name.startswith("/") else f"/{name}"
+        )
         if client is None:
             return
         request = client.request(payload.get("args") or {})
         self._to_dds[(client.service, request.sequence)] = (
-            send.client_id, payload.get("id"), payload.get("service"))
+            send.client_id,
+            payload.get("id"),
+            payload.get("service"),
+        )
 
     def _on_reply(self, service: str, request: RequestId, msg: Message) -> None:
         waiting = self._to_dds.pop((service, request.sequence), None)
@@ -193,5 +222,13 @@ class ServiceMirror:
             return
         stand_in, request_id, spelling = waiting
         if stand_in in self._internal:
-            self._send(stand_in, {"op": "service_response", "id": request_id,
-                                  "service": spelling, "values": msg, "result": True})
+            self._send(
+                stand_in,
+                {
+                    "op": "service_response",
+                    "id": request_id,
+                    "service": spelling,
+                    "values": msg,
+                    "result": True,
+                },
+            )

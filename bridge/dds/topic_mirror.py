@@ -68,8 +68,14 @@ def type_hash_user_data(registry: TypeRegistry, type_name: str) -> str:
 class TopicMirror:
     """Creates, replaces and deletes the DDS endpoints of topics; writes and takes samples."""
 
-    def __init__(self, participant: DdsParticipant, pump: Pump, outbox: Outbox,
-                 registry: TypeRegistry, deliver: Callable[[list[Arrival]], object]) -> None:
+    def __init__(
+        self,
+        participant: DdsParticipant,
+        pump: Pump,
+        outbox: Outbox,
+        registry: TypeRegistry,
+        deliver: Callable[[list[Arrival]], object],
+    ) -> None:
         self._participant = participant
         self._pump = pump
         self._outbox = outbox
@@ -121,15 +127,22 @@ class TopicMirror:
         if data_type is None:
             return False
         try:
-            raw = self._participant.writer(topic_to_dds(topic), data_type, wanted.profile,
-                                           type_hash_user_data(self._registry,
-                                                               wanted.type_name))
+            raw = self._participant.writer(
+                topic_to_dds(topic),
+                data_type,
+                wanted.profile,
+                type_hash_user_data(self._registry, wanted.type_name),
+            )
         except Exception as exc:  # Cyclone refuses e.g. a second type on one topic name
             self._refuse(topic, wanted.type_name, f"cannot create a DDS writer: {exc}")
             return False
         self.writers[topic] = _Writer(wanted, raw)
-        logger.info("DDS: writing %s (%s; %s)", topic_to_dds(topic), wanted.type_name,
-                    wanted.profile.describe())
+        logger.info(
+            "DDS: writing %s (%s; %s)",
+            topic_to_dds(topic),
+            wanted.type_name,
+            wanted.profile.describe(),
+        )
         return True
 
     def _add_reader(self, topic: str, wanted: Wanted) -> bool:
@@ -137,16 +150,23 @@ class TopicMirror:
         if data_type is None:
             return False
         try:
-            raw = self._participant.reader(topic_to_dds(topic), data_type, wanted.profile,
-                                           type_hash_user_data(self._registry,
-                                                               wanted.type_name))
+            raw = self._participant.reader(
+                topic_to_dds(topic),
+                data_type,
+                wanted.profile,
+                type_hash_user_data(self._registry, wanted.type_name),
+            )
         except Exception as exc:
             self._refuse(topic, wanted.type_name, f"cannot create a DDS reader: {exc}")
             return False
         reader = self.readers[topic] = _Reader(wanted, raw, {})
         self._pump.watch(raw.condition, lambda: self._take(topic, reader))
-        logger.info("DDS: reading %s (%s; %s)", topic_to_dds(topic), wanted.type_name,
-                    wanted.profile.describe())
+        logger.info(
+            "DDS: reading %s (%s; %s)",
+            topic_to_dds(topic),
+            wanted.type_name,
+            wanted.profile.describe(),
+        )
         return True
 
     def close(self) -> None:
@@ -154,8 +174,10 @@ class TopicMirror:
 
     def endpoint_guids(self) -> tuple[list[bytes], list[bytes]]:
         """(reader GUIDs, writer GUIDs) for the bridge's `ros_discovery_info`."""
-        return ([r.raw.guid for r in self.readers.values()],
-                [w.raw.guid for w in self.writers.values()])
+        return (
+            [r.raw.guid for r in self.readers.values()],
+            [w.raw.guid for w in self.writers.values()],
+        )
 
     # -- data --------------------------------------------------------------------------------
 
@@ -164,8 +186,9 @@ class TopicMirror:
         writer = self.writers.get(message.topic)
         if writer is None or writer.wanted.type_name != message.type_name:
             return False
-        self._outbox.put(("topic", message.topic), lambda: self._write(writer.raw, message),
-                         message.size_hint)
+        self._outbox.put(
+            ("topic", message.topic), lambda: self._write(writer.raw, message), message.size_hint
+        )
         return True
 
     def _write(self, raw: RawWriter, message: TopicMessage) -> None:

@@ -29,8 +29,7 @@ class OpRoute(Protocol):
     @property
     def op(self) -> str: ...
 
-    def run(self, ctx: Context, session: ClientSession,
-            message: Mapping[str, JsonValue]) -> None:
+    def run(self, ctx: Context, session: ClientSession, message: Mapping[str, JsonValue]) -> None:
         """Parse `message` (`schemas.ops.OpError` if malformed) and handle it."""
         ...
 
@@ -43,13 +42,13 @@ class Route(Generic[OpT]):
     parse: Callable[[Mapping[str, JsonValue]], OpT]
     handle: Callable[[Context, ClientSession, OpT], None]
 
-    def run(self, ctx: Context, session: ClientSession,
-            message: Mapping[str, JsonValue]) -> None:
+    def run(self, ctx: Context, session: ClientSession, message: Mapping[str, JsonValue]) -> None:
         self.handle(ctx, session, self.parse(message))
 
 
-def route(model: type[ModelT],
-          handle: Callable[[Context, ClientSession, ModelT], None]) -> Route[ModelT]:
+def route(
+    model: type[ModelT], handle: Callable[[Context, ClientSession, ModelT], None]
+) -> Route[ModelT]:
     """The route of an op whose pydantic `model` checks it."""
     return Route(op_name(model), partial(validate_op, model), handle)
 

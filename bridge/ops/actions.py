@@ -35,15 +35,21 @@ STATUS_ABORTED = 6  # action_msgs/GoalStatus
 
 def fail_goal(ctx: Context, caller: int, action: str, caller_id: OpId, reason: str) -> None:
     """End a caller's goal with `result: false`, status ABORTED and the reason as values."""
-    payload: JsonObject = {"op": "action_result", "action": action, "values": reason,
-                               "status": STATUS_ABORTED, "result": False}
+    payload: JsonObject = {
+        "op": "action_result",
+        "action": action,
+        "values": reason,
+        "status": STATUS_ABORTED,
+        "result": False,
+    }
     if caller_id is not None:
         payload["id"] = caller_id
     ctx.send(caller, payload)
 
 
-def action_spec_part(ctx: Context, type_name: str | None,
-                     part: Literal["goal", "result", "feedback"]) -> MessageSpec | None:
+def action_spec_part(
+    ctx: Context, type_name: str | None, part: Literal["goal", "result", "feedback"]
+) -> MessageSpec | None:
     """goal/result/feedback spec of a known action type, else None (relayed untyped)."""
     if type_name is None or not ctx.state.registry.has_action(type_name):
         return None
@@ -89,14 +95,22 @@ def forward_goal(ctx: Context, session: ClientSession, op: SendActionGoal) -> No
     entry.goals_sent += 1
     goal_id = f"action_goal:{entry.spelling}:{entry.goals_sent}"
     ctx.state.pending_goals[goal_id] = PendingGoal(
-        name, provider.client_id, session.client_id, op.id, op.action, op.feedback)
-    ctx.send(provider.client_id, {"op": "send_action_goal", "id": goal_id,
-                                  "action": entry.spelling, "action_type": type_name,
-                                  "args": args, "feedback": True})
+        name, provider.client_id, session.client_id, op.id, op.action, op.feedback
+    )
+    ctx.send(
+        provider.client_id,
+        {
+            "op": "send_action_goal",
+            "id": goal_id,
+            "action": entry.spelling,
+            "action_type": type_name,
+            "args": args,
+            "feedback": True,
+        },
+    )
 
 
-def provider_goal(ctx: Context, session: ClientSession,
-                  goal_id: OpId) -> tuple[str, PendingGoal]:
+def provider_goal(ctx: Context, session: ClientSession, goal_id: OpId) -> tuple[str, PendingGoal]:
     """The goal `goal_id` this provider was sent (its key and entry), else OpFailure."""
     if isinstance(goal_id, str):
         pending = ctx.state.pending_goals.get(goal_id)
@@ -110,10 +124,14 @@ def handle_action_feedback(ctx: Context, session: ClientSession, op: ActionFeedb
     if not pending.feedback:
         return
     entry = ctx.state.graph.actions.get(pending.action)
-    values = filled(ctx, action_spec_part(ctx, entry.type_name if entry else None,
-                                          "feedback"), op.values)
-    payload: JsonObject = {"op": "action_feedback", "action": pending.caller_action,
-                               "values": values}
+    values = filled(
+        ctx, action_spec_part(ctx, entry.type_name if entry else None, "feedback"), op.values
+    )
+    payload: JsonObject = {
+        "op": "action_feedback",
+        "action": pending.caller_action,
+        "values": values,
+    }
     if pending.caller_id is not None:
         payload["id"] = pending.caller_id
     ctx.send(pending.caller, payload)
@@ -128,34 +146,39 @@ def handle_action_result(ctx: Context, session: ClientSession, op: ActionResult)
         return
     entry = ctx.state.graph.actions.get(pending.action)
     try:
-        values = filled(ctx, action_spec_part(ctx, entry.type_name if entry else None,
-                                              "result"), op.values)
+        values = filled(
+            ctx, action_spec_part(ctx, entry.type_name if entry else None, "result"), op.values
+        )
     except OpFailure as exc:
         ctx.problem(session, "action_result", op.id, str(exc))
         fail_goal(ctx, pending.caller, pending.caller_action, pending.caller_id, str(exc))
         return
-    payload: JsonObject = {"op": "action_result", "action": pending.caller_action,
-                           "values": values, "status": op.status, "result": True}
+    payload: JsonObject = {
+        "op": "action_result",
+        "action": pending.caller_action,
+        "values": values,
+        "status": op.status,
+        "result": True,
+    }
     if pending.caller_id is not None:
         payload["id"] = pending.caller_id
     ctx.send(pending.caller, payload)
 
 
-def handle_cancel_action_goal(ctx: Context, session: ClientSession,
-                              op: CancelActionGoal) -> None:
+def handle_cancel_action_goal(ctx: Context, session: ClientSession, op: CancelActionGoal) -> None:
     """Forward the caller's cancel; the provider's eventual result reports CANCELED."""
     for goal_id, pending in ctx.state.pending_goals.items():
         if pending.caller == session.client_id and pending.caller_id == op.id:
             entry = ctx.state.graph.actions.get(pending.action)
             spelling = entry.spelling if entry else pending.action
-            ctx.send(pending.provider, {"op": "cancel_action_goal", "id": goal_id,
-                                        "action": spelling})
+            ctx.send(
+                pending.provider, {"op": "cancel_action_goal", "id": goal_id, "action": spelling}
+            )
             return
     raise OpFailure(f"no pending goal with id {op.id!r} to cancel")
 
 
-def handle_advertise_action(ctx: Context, session: ClientSession,
-                            op: AdvertiseAction) -> None:
+def handle_advertise_action(ctx: Context, session: ClientSession, op: AdvertiseAction) -> None:
     name = action_name(ctx, op.action)
     if name in ctx.state.graph.actions:
         remove_action(ctx, name, f"Action {name} was advertised again by another provider")
@@ -164,8 +187,7 @@ def handle_advertise_action(ctx: Context, session: ClientSession,
     session.actions.add(name)
 
 
-def handle_unadvertise_action(ctx: Context, session: ClientSession,
-                              op: UnadvertiseAction) -> None:
+def handle_unadvertise_action(ctx: Context, session: ClientSession, op: UnadvertiseAction) -> None:
     name = absolute_name(op.action)
     entry = ctx.state.graph.actions.get(name)
     if entry is None or entry.provider != session.node:
@@ -194,8 +216,10 @@ def release_client(ctx: Context, session: ClientSession) -> None:
             del ctx.state.pending_goals[goal_id]
             entry = ctx.state.graph.actions.get(pending.action)
             if entry is not None:
-                ctx.send(pending.provider, {"op": "cancel_action_goal", "id": goal_id,
-                                            "action": entry.spelling})
+                ctx.send(
+                    pending.provider,
+                    {"op": "cancel_action_goal", "id": goal_id, "action": entry.spelling},
+                )
 
 
 ROUTES = (

@@ -21,21 +21,35 @@ POLICY_VIOLATION = 1008  # RFC 6455 close code
 def handle_auth(ctx: Context, session: ClientSession, op: Auth) -> None:
     secret = ctx.state.config.auth_secret
     if secret is None:
-        ctx.problem(session, "auth", op.id, "authentication is not enabled on this bridge; "
-                    "auth ignored", StatusLevel.INFO)
+        ctx.problem(
+            session,
+            "auth",
+            op.id,
+            "authentication is not enabled on this bridge; auth ignored",
+            StatusLevel.INFO,
+        )
         return
     if session.authenticated:
         return
-    problem = rosauth.check(secret.get_secret_value(), op.model_dump(),
-                            ctx.now_ns / NS_PER_S, ctx.state.config.auth_window_s)
+    problem = rosauth.check(
+        secret.get_secret_value(),
+        op.model_dump(),
+        ctx.now_ns / NS_PER_S,
+        ctx.state.config.auth_window_s,
+    )
     if problem is not None:
         ctx.problem(session, "auth", op.id, f"authentication failed: {problem}; closing")
         ctx.close(session.client_id, POLICY_VIOLATION, "authentication failed")
         session.closing = True
         return
     session.authenticated = True
-    ctx.problem(session, "auth", op.id, f"authenticated (client {op.client!r}, level "
-                f"{op.level!r})", StatusLevel.INFO)
+    ctx.problem(
+        session,
+        "auth",
+        op.id,
+        f"authenticated (client {op.client!r}, level {op.level!r})",
+        StatusLevel.INFO,
+    )
 
 
 ROUTES = (route(Auth, handle_auth),)

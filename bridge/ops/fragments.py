@@ -29,11 +29,11 @@ def handle_fragment(ctx: Context, session: ClientSession, op: Fragment) -> None:
         buffer = session.fragments[key] = FragmentBuffer(total, expires)
         ctx.schedule(("fragment", session.client_id, key), expires)
     elif buffer.total != total:
-        raise OpFailure(f"fragment total {total} differs from the first fragment's "
-                        f"{buffer.total}")
+        raise OpFailure(f"fragment total {total} differs from the first fragment's {buffer.total}")
     if op.num in buffer.pieces:
-        ctx.problem(session, "fragment", key, f"duplicate fragment {op.num} ignored",
-                    StatusLevel.WARNING)
+        ctx.problem(
+            session, "fragment", key, f"duplicate fragment {op.num} ignored", StatusLevel.WARNING
+        )
         return
     buffer.pieces[op.num] = op.data
     buffer.size_chars += len(op.data)
@@ -53,9 +53,13 @@ def on_fragment_deadline(ctx: Context, client_id: int, key: str | int) -> None:
     if session is None or buffer is None or buffer.expires_at_ns > ctx.now_ns:
         return
     del session.fragments[key]
-    ctx.problem(session, "fragment", key,
-                f"discarded after {ctx.state.config.fragment_timeout_s:g} s with "
-                f"{len(buffer.pieces)} of {buffer.total} fragments")
+    ctx.problem(
+        session,
+        "fragment",
+        key,
+        f"discarded after {ctx.state.config.fragment_timeout_s:g} s with "
+        f"{len(buffer.pieces)} of {buffer.total} fragments",
+    )
 
 
 ROUTES = (route(Fragment, handle_fragment),)

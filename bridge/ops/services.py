@@ -31,11 +31,16 @@ from schemas.values import JsonObject, JsonValue, Message, OpId
 NS_PER_S = 1_000_000_000
 
 
-def respond(ctx: Context, caller: int, service: str, call_id: OpId, values: JsonValue,
-            result: bool) -> None:
+def respond(
+    ctx: Context, caller: int, service: str, call_id: OpId, values: JsonValue, result: bool
+) -> None:
     """Send the caller its `service_response`, echoing its service string and id."""
-    payload: JsonObject = {"op": "service_response", "service": service,
-                               "values": values, "result": result}
+    payload: JsonObject = {
+        "op": "service_response",
+        "service": service,
+        "values": values,
+        "result": result,
+    }
     if call_id is not None:
         payload["id"] = call_id
     ctx.send(caller, payload)
@@ -84,8 +89,9 @@ def handle_call_service(ctx: Context, session: ClientSession, op: CallService) -
         respond(ctx, session.client_id, op.service, call_id, values, True)
 
 
-def call(ctx: Context, session: ClientSession, name: str, op: CallService,
-         call_id: OpId) -> Message | None:
+def call(
+    ctx: Context, session: ClientSession, name: str, op: CallService, call_id: OpId
+) -> Message | None:
     """Answer a rosapi call (returns its values) or forward it to a provider (returns None)."""
     rosapi = ctx.state.rosapi.get(name)
     if rosapi is not None:
@@ -99,18 +105,23 @@ def call(ctx: Context, session: ClientSession, name: str, op: CallService,
     args = request_fields(ctx, entry.type_name, op.args)
     entry.requests_sent += 1
     request_id = f"service_request:{entry.spelling}:{entry.requests_sent}"
-    timeout_s = (min(op.timeout, MAX_TIMEOUT_S) if op.timeout and op.timeout > 0
-                 else ctx.state.config.call_timeout_s)
+    timeout_s = (
+        min(op.timeout, MAX_TIMEOUT_S)
+        if op.timeout and op.timeout > 0
+        else ctx.state.config.call_timeout_s
+    )
     ctx.state.pending_calls[request_id] = PendingCall(
-        name, provider.client_id, session.client_id, call_id, op.service, timeout_s)
-    ctx.send(provider.client_id, {"op": "call_service", "id": request_id,
-                                  "service": entry.spelling, "args": args})
+        name, provider.client_id, session.client_id, call_id, op.service, timeout_s
+    )
+    ctx.send(
+        provider.client_id,
+        {"op": "call_service", "id": request_id, "service": entry.spelling, "args": args},
+    )
     ctx.schedule(("call", request_id), ctx.now_ns + int(timeout_s * NS_PER_S))
     return None
 
 
-def take_pending(ctx: Context, session: ClientSession,
-                 request_id: JsonValue) -> PendingCall | None:
+def take_pending(ctx: Context, session: ClientSession, request_id: JsonValue) -> PendingCall | None:
     """Remove and return the call `request_id` if this client is the one answering it."""
     pending = ctx.state.pending_calls.get(request_id) if isinstance(request_id, str) else None
     if pending is None or pending.provider != session.client_id:
@@ -119,17 +130,19 @@ def take_pending(ctx: Context, session: ClientSession,
     return pending
 
 
-def handle_service_response(ctx: Context, session: ClientSession,
-                            op: ServiceResponse) -> None:
+def handle_service_response(ctx: Context, session: ClientSession, op: ServiceResponse) -> None:
     pending = take_pending(ctx, session, op.id)
     if pending is None:
-        raise OpFailure("Received service response for unrecognized id "
-                        "(the call timed out, failed or was never made)")
+        raise OpFailure(
+            "Received service response for unrecognized id "
+            "(the call timed out, failed or was never made)"
+        )
     settle(ctx, session, pending, op.values, op.result)
 
 
-def settle(ctx: Context, session: ClientSession, pending: PendingCall, values: JsonValue,
-           result: bool) -> None:
+def settle(
+    ctx: Context, session: ClientSession, pending: PendingCall, values: JsonValue, result: bool
+) -> None:
     """Answer the caller from a provider's `values` and `result` (see `response_values`)."""
     entry = ctx.state.graph.services.get(pending.service)
     try:
@@ -141,8 +154,9 @@ def settle(ctx: Context, session: ClientSession, pending: PendingCall, values: J
     finish(ctx, pending, answer, not isinstance(answer, str))
 
 
-def settle_unparsed_response(ctx: Context, session: ClientSession, message: JsonObject,
-                             problem: str) -> None:
+def settle_unparsed_response(
+    ctx: Context, session: ClientSession, message: JsonObject, problem: str
+) -> None:
     """A provider's response that failed validation still ends its caller's wait at once.
 
     roslibjs omits `result` when its handler returns nothing; values given as an object
@@ -158,8 +172,9 @@ def settle_unparsed_response(ctx: Context, session: ClientSession, message: Json
         finish(ctx, pending, f"Service {pending.service} answered badly: {problem}", False)
 
 
-def response_values(ctx: Context, entry: ServiceEntry | None, values: JsonValue,
-                    result: bool) -> Message | str:
+def response_values(
+    ctx: Context, entry: ServiceEntry | None, values: JsonValue, result: bool
+) -> Message | str:
     """The values to return: an object means success; a string or `result: false` failure."""
     if isinstance(values, str):
         return values
@@ -184,8 +199,7 @@ def fail_calls(ctx: Context, service: str, reason: str) -> None:
             finish(ctx, pending, reason, False)
 
 
-def handle_advertise_service(ctx: Context, session: ClientSession,
-                             op: AdvertiseService) -> None:
+def handle_advertise_service(ctx: Context, session: ClientSession, op: AdvertiseService) -> None:
     name = absolute_name(op.service)
     if name in ctx.state.rosapi:
         raise OpFailure(f"Service {name} is provided by the bridge itself")
@@ -198,12 +212,14 @@ def handle_advertise_service(ctx: Context, session: ClientSession,
         if previous is not None:
             previous.services.discard(name)
     ctx.state.graph.services[name] = ServiceEntry(
-        name, op.service, service_type_name(ctx, op.type), session.node)
+        name, op.service, service_type_name(ctx, op.type), session.node
+    )
     session.services.add(name)
 
 
-def handle_unadvertise_service(ctx: Context, session: ClientSession,
-                               op: UnadvertiseService) -> None:
+def handle_unadvertise_service(
+    ctx: Context, session: ClientSession, op: UnadvertiseService
+) -> None:
     name = absolute_name(op.service)
     entry = ctx.state.graph.services.get(name)
     if entry is None or entry.provider != session.node:
@@ -230,8 +246,12 @@ def on_call_deadline(ctx: Context, request_id: str) -> None:
     """A forwarded call got no response in time."""
     pending = ctx.state.pending_calls.pop(request_id, None)
     if pending is not None:
-        finish(ctx, pending, f"Service {pending.service} call timed out after "
-                             f"{pending.timeout_s:g} s", False)
+        finish(
+            ctx,
+            pending,
+            f"Service {pending.service} call timed out after {pending.timeout_s:g} s",
+            False,
+        )
 
 
 ROUTES = (

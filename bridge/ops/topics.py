@@ -46,8 +46,6 @@ def declare(ctx: Context, name: str, type_name: str) -> None:
         raise OpFailure(str(exc)) from exc
 
 
-
-
 def handle_advertise(ctx: Context, session: ClientSession, op: Advertise) -> None:
     name = topic_name(ctx, op.topic)
     declare(ctx, name, message_type(ctx, op.type))
@@ -59,8 +57,7 @@ def handle_advertise(ctx: Context, session: ClientSession, op: Advertise) -> Non
 
 def handle_unadvertise(ctx: Context, session: ClientSession, op: Unadvertise) -> None:
     name = topic_name(ctx, op.topic)
-    ctx.state.graph.remove_publisher(name, session.node, op.id,
-                                     every_id=op.id is None)
+    ctx.state.graph.remove_publisher(name, session.node, op.id, every_id=op.id is None)
     entry = ctx.state.graph.topics.get(name)
     if entry is None or session.node not in entry.publishers:
         session.published.discard(name)
@@ -72,16 +69,23 @@ def handle_publish(ctx: Context, session: ClientSession, op: PublishFields) -> N
     checked = checked_message(ctx, ctx.state.registry.message(type_name), op)
     if isinstance(checked, InvalidMessage):
         raise OpFailure(f"message dropped: {checked.problem}")
-    message = TopicMessage(name, checked.spec.name, checked.msg, ctx.now_ns,
-                           ctx.state.registry, size_hint=checked.size_hint,
-                           cdr_bytes=checked.cdr_bytes)
+    message = TopicMessage(
+        name,
+        checked.spec.name,
+        checked.msg,
+        ctx.now_ns,
+        ctx.state.registry,
+        size_hint=checked.size_hint,
+        cdr_bytes=checked.cdr_bytes,
+    )
     if session.node in entry.latching:
         entry.latched = message
     ctx.publish(message, session.node)
 
 
-def publishing_entry(ctx: Context, session: ClientSession, name: str,
-                     op: PublishFields) -> tuple[TopicEntry, str]:
+def publishing_entry(
+    ctx: Context, session: ClientSession, name: str, op: PublishFields
+) -> tuple[TopicEntry, str]:
     """The topic `op` publishes on and its type, with the client among its publishers."""
     graph = ctx.state.graph
     if op.type is not None:
@@ -103,8 +107,9 @@ def checked_message(ctx: Context, spec: MessageSpec, op: PublishFields) -> Check
     frame = ctx.frame
     if frame is not None and frame.checked is not None and frame.checked.spec is spec:
         return frame.checked
-    return check_message(spec, op.msg, wire_bytes=frame.wire_bytes if frame else 0,
-                         now_ns=ctx.now_ns)
+    return check_message(
+        spec, op.msg, wire_bytes=frame.wire_bytes if frame else 0, now_ns=ctx.now_ns
+    )
 
 
 def subscribe_settings(op: Subscribe) -> SubscribeSettings:

@@ -30,5 +30,7 @@ def text_arg(request: dict[str, Any], field: str) -> str:
 
 def table(prefix: str, entries: dict[str, tuple[str, RosapiHandler]]) -> dict[str, RosapiService]:
     """`{"topics": ("Topics", fn)}` -> `{"/rosapi/topics": RosapiService(...)}`."""
-    return {f"{prefix}/{name}": RosapiService(f"rosapi_msgs/srv/{srv}", handler)
-            for name, (srv, handler) in entries.items()}
+    return {
+        f"{prefix}/{name}": RosapiService(f"rosapi_msgs/srv/{srv}", handler)
+        for name, (srv, handler) in entries.items()
+    }

@@ -52,8 +52,11 @@ def full_text(ctx: Context, type_name: str) -> str:
 
 def topics_and_raw_types(ctx: Context, request: dict[str, Any]) -> dict[str, Any]:
     entries = ctx.state.graph.typed_topics()
-    return {"topics": [name for name, _ in entries], "types": [t for _, t in entries],
-            "typedefs_full_text": [full_text(ctx, t) for _, t in entries]}
+    return {
+        "topics": [name for name, _ in entries],
+        "types": [t for _, t in entries],
+        "typedefs_full_text": [full_text(ctx, t) for _, t in entries],
+    }
 
 
 def service_names(ctx: Context) -> list[str]:
@@ -154,22 +157,25 @@ def get_ros_version(ctx: Context, request: dict[str, Any]) -> dict[str, Any]:
     return {"version": 2, "distro": ctx.state.config.distro}
 
 
-SERVICES = table(PREFIX, {
-    "topics": ("Topics", topics),
-    "topics_for_type": ("TopicsForType", topics_for_type),
-    "topics_and_raw_types": ("TopicsAndRawTypes", topics_and_raw_types),
-    "services": ("Services", services),
-    "services_for_type": ("ServicesForType", services_for_type),
-    "service_type": ("ServiceType", service_type),
-    "topic_type": ("TopicType", topic_type),
-    "nodes": ("Nodes", nodes),
-    "node_details": ("NodeDetails", node_details),
-    "publishers": ("Publishers", publishers),
-    "subscribers": ("Subscribers", subscribers),
-    "service_providers": ("ServiceProviders", service_providers),
-    "service_node": ("ServiceNode", service_node),
-    "action_servers": ("ActionServers", action_servers),
-    "action_type": ("ActionType", action_type),
-    "get_time": ("GetTime", get_time),
-    "get_ros_version": ("GetROSVersion", get_ros_version),
-})
+SERVICES = table(
+    PREFIX,
+    {
+        "topics": ("Topics", topics),
+        "topics_for_type": ("TopicsForType", topics_for_type),
+        "topics_and_raw_types": ("TopicsAndRawTypes", topics_and_raw_types),
+        "services": ("Services", services),
+        "services_for_type": ("ServicesForType", services_for_type),
+        "service_type": ("ServiceType", service_type),
+        "topic_type": ("TopicType", topic_type),
+        "nodes": ("Nodes", nodes),
+        "node_details": ("NodeDetails", node_details),
+        "publishers": ("Publishers", publishers),
+        "subscribers": ("Subscribers", subscribers),
+        "service_providers": ("ServiceProviders", service_providers),
+        "service_node": ("ServiceNode", service_node),
+        "action_servers": ("ActionServers", action_servers),
+        "action_type": ("ActionType", action_type),
+        "get_time": ("GetTime", get_time),
+        "get_ros_version": ("GetROSVersion", get_ros_version),
+    },
+)

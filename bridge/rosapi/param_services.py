@@ -26,8 +26,10 @@ def param_name(request: dict[str, Any]) -> str:
     if not name:
         raise RosapiError("parameter name must not be empty")
     if len(name) > MAX_PARAM_NAME_CHARS or not name.isprintable():
-        raise RosapiError(f"parameter name {echo(name, 60)} must be at most "
-                          f"{MAX_PARAM_NAME_CHARS} printable characters")
+        raise RosapiError(
+            f"parameter name {echo(name, 60)} must be at most "
+            f"{MAX_PARAM_NAME_CHARS} printable characters"
+        )
     return name
 
 
@@ -71,10 +73,13 @@ def get_param_names(ctx: Context, request: dict[str, Any]) -> dict[str, Any]:
     return {"names": sorted(ctx.state.params)}
 
 
-SERVICES = table(PREFIX, {
-    "get_param": ("GetParam", get_param),
-    "set_param": ("SetParam", set_param),
-    "has_param": ("HasParam", has_param),
-    "delete_param": ("DeleteParam", delete_param),
-    "get_param_names": ("GetParamNames", get_param_names),
-})
+SERVICES = table(
+    PREFIX,
+    {
+        "get_param": ("GetParam", get_param),
+        "set_param": ("SetParam", set_param),
+        "has_param": ("HasParam", has_param),
+        "delete_param": ("DeleteParam", delete_param),
+        "get_param_names": ("GetParamNames", get_param_names),
+    },
+)

@@ -57,16 +57,24 @@ def action_feedback_details(ctx: Context, request: dict[str, Any]) -> dict[str, 
 
 def interfaces(ctx: Context, request: dict[str, Any]) -> dict[str, Any]:
     registry = ctx.state.registry
-    return {"interfaces": [*registry.message_names(), *registry.service_names(),
-                           *registry.action_names()]}
+    return {
+        "interfaces": [
+            *registry.message_names(),
+            *registry.service_names(),
+            *registry.action_names(),
+        ]
+    }
 
 
-SERVICES = table(PREFIX, {
-    "message_details": ("MessageDetails", message_details),
-    "service_request_details": ("ServiceRequestDetails", service_request_details),
-    "service_response_details": ("ServiceResponseDetails", service_response_details),
-    "action_goal_details": ("ActionGoalDetails", action_goal_details),
-    "action_result_details": ("ActionResultDetails", action_result_details),
-    "action_feedback_details": ("ActionFeedbackDetails", action_feedback_details),
-    "interfaces": ("Interfaces", interfaces),
-})
+SERVICES = table(
+    PREFIX,
+    {
+        "message_details": ("MessageDetails", message_details),
+        "service_request_details": ("ServiceRequestDetails", service_request_details),
+        "service_response_details": ("ServiceResponseDetails", service_response_details),
+        "action_goal_details": ("ActionGoalDetails", action_goal_details),
+        "action_result_details": ("ActionResultDetails", action_result_details),
+        "action_feedback_details": ("ActionFeedbackDetails", action_feedback_details),
+        "interfaces": ("Interfaces", interfaces),
+    },
+)

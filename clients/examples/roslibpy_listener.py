@@ -20,8 +20,14 @@ import roslibpy
 Message = dict[str, Any]
 
 
-def wait_for(ros: roslibpy.Ros, topic: str, type_name: str, count: int, timeout_s: float,
-             show: Callable[[Message], str]) -> bool:
+def wait_for(
+    ros: roslibpy.Ros,
+    topic: str,
+    type_name: str,
+    count: int,
+    timeout_s: float,
+    show: Callable[[Message], str],
+) -> bool:
     """Subscribe, print ``count`` messages with ``show``, unsubscribe; False on timeout."""
     seen: list[Message] = []
     done = threading.Event()
@@ -43,8 +49,10 @@ def wait_for(ros: roslibpy.Ros, topic: str, type_name: str, count: int, timeout_
 def imu_summary(msg: Message) -> str:
     rate = msg["angular_velocity"]
     accel = msg["linear_acceleration"]
-    return (f"yaw rate {rate['z']:+.3f} rad/s, accel z {accel['z']:+.2f} m/s^2, "
-            f"stamp {msg['header']['stamp']['sec']}.{msg['header']['stamp']['nanosec']:09d}")
+    return (
+        f"yaw rate {rate['z']:+.3f} rad/s, accel z {accel['z']:+.2f} m/s^2, "
+        f"stamp {msg['header']['stamp']['sec']}.{msg['header']['stamp']['nanosec']:09d}"
+    )
 
 
 def grid_summary(msg: Message) -> str:
@@ -67,10 +75,17 @@ def main(argv: list[str] | None = None) -> int:
     try:
         topics = ros.get_topics()
         print(f"{len(topics)} topics: {', '.join(sorted(topics))}", flush=True)
-        ok = wait_for(ros, "/imu/data", "sensor_msgs/msg/Imu", args.count, args.timeout,
-                      imu_summary)
-        ok = ok and wait_for(ros, "/nav/obstacle_map", "nav_msgs/msg/OccupancyGrid",
-                             args.count, args.timeout, grid_summary)
+        ok = wait_for(
+            ros, "/imu/data", "sensor_msgs/msg/Imu", args.count, args.timeout, imu_summary
+        )
+        ok = ok and wait_for(
+            ros,
+            "/nav/obstacle_map",
+            "nav_msgs/msg/OccupancyGrid",
+            args.count,
+            args.timeout,
+            grid_summary,
+        )
     finally:
         ros.close()
     return 0 if ok else 1

@@ -27,16 +27,21 @@ STOP_TIMEOUT_S = 30.0  # finishing a file: the last chunk and the index
 
 def recorder_component(output: Path) -> Component:
     """Records every topic of the stack's bridge into ``output``; ready at once."""
-    return Component("rec", "recorder", RECORD_MODULE,
-                     ("--bridge", BRIDGE_URL, "--output", str(output)))
+    return Component(
+        "rec", "recorder", RECORD_MODULE, ("--bridge", BRIDGE_URL, "--output", str(output))
+    )
 
 
 def player_component(recording: Path, topics: Sequence[str]) -> Component:
     """Plays ``topics`` of ``recording`` in a loop (stamps shifted to today's clock); ready
     when each of them has a publisher, like the simulator it stands in for."""
-    return Component("play", "player", PLAY_MODULE,
-                     (str(recording), "--bridge", BRIDGE_URL, "--loop", "--topics", *topics),
-                     tuple(topics))
+    return Component(
+        "play",
+        "player",
+        PLAY_MODULE,
+        (str(recording), "--bridge", BRIDGE_URL, "--loop", "--topics", *topics),
+        tuple(topics),
+    )
 
 
 def record_path(path: Path, label: str, runs: int) -> Path:
@@ -49,8 +54,18 @@ async def recorder_process(url: str, output: Path) -> AsyncIterator[asyncio.subp
     """``riverbridge record`` against ``url`` for the block, then stopped with SIGINT (the
     file gets its summary). Its output goes to this process's stderr."""
     process = await asyncio.create_subprocess_exec(
-        sys.executable, "-m", RECORD_MODULE, "--bridge", url, "--output", str(output),
-        "--log-level", "WARNING", stdin=asyncio.subprocess.DEVNULL, stdout=sys.stderr)
+        sys.executable,
+        "-m",
+        RECORD_MODULE,
+        "--bridge",
+        url,
+        "--output",
+        str(output),
+        "--log-level",
+        "WARNING",
+        stdin=asyncio.subprocess.DEVNULL,
+        stdout=sys.stderr,
+    )
     try:
         yield process
     finally:
@@ -59,7 +74,8 @@ async def recorder_process(url: str, output: Path) -> AsyncIterator[asyncio.subp
         try:
             await asyncio.wait_for(process.wait(), STOP_TIMEOUT_S)
         except TimeoutError:
-            log.error("the recorder did not finish %s within %.0f s; killed", output,
-                      STOP_TIMEOUT_S)
+            log.error(
+                "the recorder did not finish %s within %.0f s; killed", output, STOP_TIMEOUT_S
+            )
             process.kill()
             await process.wait()

@@ -28,9 +28,11 @@ from mcap.well_known import MessageEncoding, Profile, SchemaEncoding
 from mcap.writer import CompressionType, Writer
 
 Compression = Literal["zstd", "lz4", "none"]
-COMPRESSIONS: dict[str, CompressionType] = {"zstd": CompressionType.ZSTD,
-                                            "lz4": CompressionType.LZ4,
-                                            "none": CompressionType.NONE}
+COMPRESSIONS: dict[str, CompressionType] = {
+    "zstd": CompressionType.ZSTD,
+    "lz4": CompressionType.LZ4,
+    "none": CompressionType.NONE,
+}
 # A chunk of about 4 MiB: one LIDAR scan (~5.5 MB) closes its own chunk, small topics share.
 CHUNK_BYTES = 4 * 1024 * 1024
 # Longest a message waits in an open chunk: what a crash can lose of the small topics.
@@ -65,8 +67,9 @@ class McapRecording:
         # Buffered (the Writer would wrap a raw file in its own buffer it never flushes by
         # itself); emptied after every message, which costs a syscall only after a chunk.
         self._file: BinaryIO = open(self.path, "wb")  # noqa: SIM115 (closed in close)
-        self._writer = Writer(self._file, chunk_size=self.chunk_bytes,
-                              compression=COMPRESSIONS[self.compression])
+        self._writer = Writer(
+            self._file, chunk_size=self.chunk_bytes, compression=COMPRESSIONS[self.compression]
+        )
         self._writer.start(profile=Profile.ROS2, library=LIBRARY)
         self._schemas: dict[str, int] = {}
         self._channels: dict[str, int] = {}
@@ -82,11 +85,13 @@ class McapRecording:
             return
         schema_id = self._schemas.get(type_name)
         if schema_id is None:
-            schema_id = self._writer.register_schema(type_name, SchemaEncoding.ROS2,
-                                                     definition.encode("utf-8"))
+            schema_id = self._writer.register_schema(
+                type_name, SchemaEncoding.ROS2, definition.encode("utf-8")
+            )
             self._schemas[type_name] = schema_id
-        channel_id = self._writer.register_channel(topic, MessageEncoding.CDR, schema_id,
-                                                   {"offered_qos_profiles": ""})
+        channel_id = self._writer.register_channel(
+            topic, MessageEncoding.CDR, schema_id, {"offered_qos_profiles": ""}
+        )
         self._channels[topic] = channel_id
         self._sequence[channel_id] = 0
         self.counts[topic] = TopicCounts(type_name)
@@ -98,8 +103,9 @@ class McapRecording:
         """Append one message of a registered topic (``cdr`` with its 4-byte header)."""
         channel_id = self._channels[topic]
         self._sequence[channel_id] += 1
-        self._writer.add_message(channel_id, log_time_ns, cdr, publish_time_ns,
-                                 self._sequence[channel_id])
+        self._writer.add_message(
+            channel_id, log_time_ns, cdr, publish_time_ns, self._sequence[channel_id]
+        )
         counts = self.counts[topic]
         counts.messages += 1
         counts.bytes += len(cdr)

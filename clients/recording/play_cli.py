@@ -54,35 +54,73 @@ def positive_rate(text: str) -> float:
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
-        prog="riverbridge play", description="Advertise the topics of an MCAP recording on a "
-        "bridge and publish its messages at their recorded timing.")
+        prog="riverbridge play",
+        description="Advertise the topics of an MCAP recording on a "
+        "bridge and publish its messages at their recorded timing.",
+    )
     parser.add_argument("recording", type=recording_file, metavar="FILE.mcap")
-    parser.add_argument("--bridge", type=ws_url, default="ws://127.0.0.1:9090", metavar="URL",
-                        help="the bridge to publish to (default %(default)s)")
-    parser.add_argument("--rate", type=positive_rate, default=1.0, metavar="X",
-                        help="playback speed, 2 = twice as fast (default %(default)s)")
-    parser.add_argument("--loop", action="store_true",
-                        help="start again after the last message, until Ctrl-C/SIGTERM")
-    parser.add_argument("--topics", nargs="+", type=topic_pattern, default=[], metavar="GLOB",
-                        help="play only topics matching these shell patterns (default: all but "
-                        f"the bridge's own: {', '.join(BRIDGE_OWNED)})")
-    parser.add_argument("--stamps", choices=STAMP_MODES, default="shift",
-                        help="header stamps: shift to today's clock keeping their distance to "
-                        "the recorded timing (default), now = time of publication, keep as "
-                        "recorded")
-    parser.add_argument("--duration", type=non_negative_seconds, default=0.0, metavar="S",
-                        help="stop after S seconds (default 0: at the end, or never with --loop)")
-    parser.add_argument("--connect-timeout", type=non_negative_seconds, default=10.0,
-                        metavar="S", help="seconds to keep trying to reach the bridge")
-    parser.add_argument("--log-level", default="INFO",
-                        choices=("DEBUG", "INFO", "WARNING", "ERROR"))
+    parser.add_argument(
+        "--bridge",
+        type=ws_url,
+        default="ws://127.0.0.1:9090",
+        metavar="URL",
+        help="the bridge to publish to (default %(default)s)",
+    )
+    parser.add_argument(
+        "--rate",
+        type=positive_rate,
+        default=1.0,
+        metavar="X",
+        help="playback speed, 2 = twice as fast (default %(default)s)",
+    )
+    parser.add_argument(
+        "--loop",
+        action="store_true",
+        help="start again after the last message, until Ctrl-C/SIGTERM",
+    )
+    parser.add_argument(
+        "--topics",
+        nargs="+",
+        type=topic_pattern,
+        default=[],
+        metavar="GLOB",
+        help="play only topics matching these shell patterns (default: all but "
+        f"the bridge's own: {', '.join(BRIDGE_OWNED)})",
+    )
+    parser.add_argument(
+        "--stamps",
+        choices=STAMP_MODES,
+        default="shift",
+        help="header stamps: shift to today's clock keeping their distance to "
+        "the recorded timing (default), now = time of publication, keep as "
+        "recorded",
+    )
+    parser.add_argument(
+        "--duration",
+        type=non_negative_seconds,
+        default=0.0,
+        metavar="S",
+        help="stop after S seconds (default 0: at the end, or never with --loop)",
+    )
+    parser.add_argument(
+        "--connect-timeout",
+        type=non_negative_seconds,
+        default=10.0,
+        metavar="S",
+        help="seconds to keep trying to reach the bridge",
+    )
+    parser.add_argument(
+        "--log-level", default="INFO", choices=("DEBUG", "INFO", "WARNING", "ERROR")
+    )
     return parser
 
 
 def summary(path: Path, stats: PlayStats) -> str:
-    lines = [f"played {path}: {stats.total} messages on {len(stats.messages)} topics in "
-             f"{stats.passes} pass(es); publishing ran at most {stats.max_late_s * 1e3:.1f} ms "
-             "late"]
+    lines = [
+        f"played {path}: {stats.total} messages on {len(stats.messages)} topics in "
+        f"{stats.passes} pass(es); publishing ran at most {stats.max_late_s * 1e3:.1f} ms "
+        "late"
+    ]
     lines += [f"  {topic:<32} {count:>7} msgs" for topic, count in sorted(stats.messages.items())]
     lines += [f"  not played: {topic}: {why}" for topic, why in stats.skipped_topics.items()]
     return "\n".join(lines)
@@ -91,12 +129,19 @@ def summary(path: Path, stats: PlayStats) -> str:
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
-    logging.basicConfig(level=args.log_level,
-                        format="%(asctime)s %(levelname)s %(name)s: %(message)s")
-    topics = (TopicFilter(tuple(args.topics)) if args.topics
-              else TopicFilter(excluded=BRIDGE_OWNED))
-    player = Player(args.bridge, args.recording, topics=topics, rate=args.rate, loop=args.loop,
-                    stamps=args.stamps, connect_timeout_s=args.connect_timeout)
+    logging.basicConfig(
+        level=args.log_level, format="%(asctime)s %(levelname)s %(name)s: %(message)s"
+    )
+    topics = TopicFilter(tuple(args.topics)) if args.topics else TopicFilter(excluded=BRIDGE_OWNED)
+    player = Player(
+        args.bridge,
+        args.recording,
+        topics=topics,
+        rate=args.rate,
+        loop=args.loop,
+        stamps=args.stamps,
+        connect_timeout_s=args.connect_timeout,
+    )
 
     async def serve(stop: asyncio.Event) -> None:
         await player.run(stop)

@@ -95,8 +95,9 @@ def restamp(msg: Any, change: Callable[[int], int]) -> None:
         header = msg.get("header")
         if isinstance(header, dict) and isinstance(header.get("stamp"), dict):
             stamp = header["stamp"]
-            sec, nanosec = divmod(change(int(stamp["sec"]) * NS_PER_S + int(stamp["nanosec"])),
-                                  NS_PER_S)
+            sec, nanosec = divmod(
+                change(int(stamp["sec"]) * NS_PER_S + int(stamp["nanosec"])), NS_PER_S
+            )
             header["stamp"] = {"sec": sec, "nanosec": nanosec}
         for value in msg.values():
             if isinstance(value, dict | list):
@@ -115,17 +116,27 @@ def ensure_type(registry: TypeRegistry, type_name: str, definition: str) -> None
     try:
         types = get_types_from_msg(definition, type_name)
     except TypesysError as exc:
-        raise SchemaError(f"the recording's definition of {type_name} does not parse: "
-                          f"{exc}") from None
+        raise SchemaError(
+            f"the recording's definition of {type_name} does not parse: {exc}"
+        ) from None
     registry.add_interfaces(InterfaceSet(types=types))
 
 
 class Player:
     """Publishes the recording at ``path`` into the bridge at ``url``."""
 
-    def __init__(self, url: str, path: Path, *, topics: TopicFilter | None = None,
-                 rate: float = 1.0, loop: bool = False, stamps: StampMode = "shift",
-                 registry: TypeRegistry | None = None, connect_timeout_s: float = 10.0) -> None:
+    def __init__(
+        self,
+        url: str,
+        path: Path,
+        *,
+        topics: TopicFilter | None = None,
+        rate: float = 1.0,
+        loop: bool = False,
+        stamps: StampMode = "shift",
+        registry: TypeRegistry | None = None,
+        connect_timeout_s: float = 10.0,
+    ) -> None:
         if not rate > 0:
             raise ValueError(f"rate must be positive, got {rate}")
         self.url, self.path, self.rate, self.loop, self.stamps = url, path, rate, loop, stamps
@@ -137,8 +148,9 @@ class Player:
 
     async def run(self, stop: asyncio.Event) -> PlayStats:
         """Play until the recording ends (or ``stop``; with ``loop``, only ``stop``)."""
-        async with node_links(self.url, "player",
-                              connect_timeout_s=self._connect_timeout_s) as links:
+        async with node_links(
+            self.url, "player", connect_timeout_s=self._connect_timeout_s
+        ) as links:
             try:
                 while not stop.is_set():
                     played = await self._one_pass(stop, links.bulk, links.realtime)
@@ -149,12 +161,14 @@ class Player:
             finally:
                 for _, task in self._senders.values():
                     task.cancel()
-                await asyncio.gather(*(t for _, t in self._senders.values()),
-                                     return_exceptions=True)
+                await asyncio.gather(
+                    *(t for _, t in self._senders.values()), return_exceptions=True
+                )
         return self.stats
 
-    async def _one_pass(self, stop: asyncio.Event, bulk: RosbridgeClient,
-                        realtime: RosbridgeClient) -> int:
+    async def _one_pass(
+        self, stop: asyncio.Event, bulk: RosbridgeClient, realtime: RosbridgeClient
+    ) -> int:
         """Publish the recording once; the number of messages published.
 
         The clock starts once the first ``LOOKAHEAD`` messages are decoded and their topics
@@ -178,8 +192,10 @@ class Player:
                     break
                 self.stats.max_late_s = max(self.stats.max_late_s, -delay_s)
                 if self.stamps == "shift":
-                    restamp(item.msg, functools.partial(
-                        _shifted, start_wall_ns, item.first_log_ns, self.rate))
+                    restamp(
+                        item.msg,
+                        functools.partial(_shifted, start_wall_ns, item.first_log_ns, self.rate),
+                    )
                 (await self._sender(item, bulk, realtime)).put_nowait(item)
                 played += 1
         finally:
@@ -207,8 +223,9 @@ class Player:
             messages.close()
         await queue.put(None)
 
-    def _decode_batch(self, messages: Iterator[RecordedMessage],
-                      first: list[int]) -> list[Scheduled]:
+    def _decode_batch(
+        self, messages: Iterator[RecordedMessage], first: list[int]
+    ) -> list[Scheduled]:
         batch: list[Scheduled] = []
         for recorded in messages:
             if not first:
@@ -234,8 +251,9 @@ class Player:
         due_s = max(0.0, (recorded.log_time_ns - first_ns) / NS_PER_S / self.rate)
         return Scheduled(topic, recorded.type_name, msg, due_s, len(recorded.cdr), first_ns)
 
-    async def _sender(self, item: Scheduled, bulk: RosbridgeClient,
-                      realtime: RosbridgeClient) -> asyncio.Queue[Scheduled | None]:
+    async def _sender(
+        self, item: Scheduled, bulk: RosbridgeClient, realtime: RosbridgeClient
+    ) -> asyncio.Queue[Scheduled | None]:
         """The queue of ``item``'s topic; the first time, advertise it and start its sender."""
         entry = self._senders.get(item.topic)
         if entry is None:
@@ -243,13 +261,15 @@ class Player:
             await client.advertise(item.topic, item.type_name, latch=item.topic in LATCHED)
             log.info("playing %s (%s)", item.topic, item.type_name)
             queue: asyncio.Queue[Scheduled | None] = asyncio.Queue()
-            task = asyncio.create_task(self._send(client, item.topic, queue),
-                                       name=f"play {item.topic}")
+            task = asyncio.create_task(
+                self._send(client, item.topic, queue), name=f"play {item.topic}"
+            )
             entry = self._senders[item.topic] = (queue, task)
         return entry[0]
 
-    async def _send(self, client: RosbridgeClient, topic: str,
-                    queue: asyncio.Queue[Scheduled | None]) -> None:
+    async def _send(
+        self, client: RosbridgeClient, topic: str, queue: asyncio.Queue[Scheduled | None]
+    ) -> None:
         """Publish what arrives on ``queue`` in order (None ends)."""
         while (item := await queue.get()) is not None:
             if self.stamps == "now":
@@ -261,9 +281,7 @@ class Player:
         """Let every topic's sender publish what is queued, then end it."""
         for queue, _ in self._senders.values():
             queue.put_nowait(None)
-        await asyncio.gather(*(task for _, task in self._senders.values()),
-                             return_exceptions=True)
-
+        await asyncio.gather(*(task for _, task in self._senders.values()), return_exceptions=True)
 
 
 def _constant(value: int, _ignored: int) -> int:

@@ -34,17 +34,27 @@ class RecordedMessage:
 
 
 def is_ros2(schema: Schema | None, channel: Channel) -> bool:
-    return (schema is not None and schema.encoding == SchemaEncoding.ROS2
-            and channel.message_encoding == MessageEncoding.CDR)
+    return (
+        schema is not None
+        and schema.encoding == SchemaEncoding.ROS2
+        and channel.message_encoding == MessageEncoding.CDR
+    )
 
 
 def _message(schema: Schema, channel: Channel, message: Message) -> RecordedMessage:
-    return RecordedMessage(channel.topic, schema.name, schema.data.decode("utf-8"),
-                           bytes(message.data), message.log_time, message.publish_time)
+    return RecordedMessage(
+        channel.topic,
+        schema.name,
+        schema.data.decode("utf-8"),
+        bytes(message.data),
+        message.log_time,
+        message.publish_time,
+    )
 
 
-def read_recording(path: Path, wanted: Callable[[str], bool]
-                   ) -> Generator[RecordedMessage, None, None]:
+def read_recording(
+    path: Path, wanted: Callable[[str], bool]
+) -> Generator[RecordedMessage, None, None]:
     """The ROS 2 (``ros2msg``/``cdr``) messages of the topics ``wanted`` takes, in time order.
 
     Raises :class:`McapError` if ``path`` is not an MCAP file at all.
@@ -56,8 +66,11 @@ def read_recording(path: Path, wanted: Callable[[str], bool]
         except Exception:  # a truncated file ends in chunk data, not a footer: any error here
             summary = None
         if summary is not None and summary.chunk_indexes:
-            topics = [c.topic for c in summary.channels.values()
-                      if wanted(c.topic) and is_ros2(summary.schemas.get(c.schema_id), c)]
+            topics = [
+                c.topic
+                for c in summary.channels.values()
+                if wanted(c.topic) and is_ros2(summary.schemas.get(c.schema_id), c)
+            ]
             for schema, channel, message in reader.iter_messages(topics=topics):
                 assert schema is not None  # is_ros2 above
                 yield _message(schema, channel, message)
@@ -66,8 +79,9 @@ def read_recording(path: Path, wanted: Callable[[str], bool]
         yield from _stream(NonSeekingReader(stream), wanted, path)
 
 
-def _stream(reader: NonSeekingReader, wanted: Callable[[str], bool],
-            path: Path) -> Iterator[RecordedMessage]:
+def _stream(
+    reader: NonSeekingReader, wanted: Callable[[str], bool], path: Path
+) -> Iterator[RecordedMessage]:
     messages = reader.iter_messages(log_time_order=False)
     while True:
         try:
@@ -91,7 +105,9 @@ def recorded_topics(path: Path) -> dict[str, str]:
         except Exception:  # cut-off file, see read_recording
             summary = None
         if summary is not None:
-            return {c.topic: summary.schemas[c.schema_id].name
-                    for c in summary.channels.values()
-                    if is_ros2(summary.schemas.get(c.schema_id), c)}
+            return {
+                c.topic: summary.schemas[c.schema_id].name
+                for c in summary.channels.values()
+                if is_ros2(summary.schemas.get(c.schema_id), c)
+            }
     return {m.topic: m.type_name for m in read_recording(path, lambda _topic: True)}

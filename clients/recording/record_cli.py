@@ -58,46 +58,92 @@ def non_negative_seconds(text: str) -> float:
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
-        prog="riverbridge record", description="Record a running bridge's topics (all, or "
+        prog="riverbridge record",
+        description="Record a running bridge's topics (all, or "
         "those matching --topics) into an MCAP file with ROS 2 schemas and CDR messages, for "
-        "Foxglove/Lichtblick, ros2 bag and `riverbridge play`.")
-    parser.add_argument("--bridge", type=ws_url, default="ws://127.0.0.1:9090", metavar="URL",
-                        help="the bridge to record (default %(default)s)")
-    parser.add_argument("--output", "-o", type=output_file, required=True, metavar="FILE",
-                        help="the MCAP file to write (replaced if it exists)")
-    parser.add_argument("--topics", nargs="+", type=topic_pattern, default=[], metavar="GLOB",
-                        help="record only topics matching these shell patterns (default: all; "
-                        "new topics are picked up as they appear)")
-    parser.add_argument("--duration", type=non_negative_seconds, default=0.0, metavar="S",
-                        help="stop after S seconds (default 0: until Ctrl-C/SIGTERM)")
-    parser.add_argument("--compression", choices=tuple(COMPRESSIONS), default="zstd",
-                        help="chunk compression (default %(default)s)")
-    parser.add_argument("--connect-timeout", type=non_negative_seconds, default=10.0,
-                        metavar="S", help="seconds to keep trying to reach the bridge")
-    parser.add_argument("--log-level", default="INFO",
-                        choices=("DEBUG", "INFO", "WARNING", "ERROR"))
+        "Foxglove/Lichtblick, ros2 bag and `riverbridge play`.",
+    )
+    parser.add_argument(
+        "--bridge",
+        type=ws_url,
+        default="ws://127.0.0.1:9090",
+        metavar="URL",
+        help="the bridge to record (default %(default)s)",
+    )
+    parser.add_argument(
+        "--output",
+        "-o",
+        type=output_file,
+        required=True,
+        metavar="FILE",
+        help="the MCAP file to write (replaced if it exists)",
+    )
+    parser.add_argument(
+        "--topics",
+        nargs="+",
+        type=topic_pattern,
+        default=[],
+        metavar="GLOB",
+        help="record only topics matching these shell patterns (default: all; "
+        "new topics are picked up as they appear)",
+    )
+    parser.add_argument(
+        "--duration",
+        type=non_negative_seconds,
+        default=0.0,
+        metavar="S",
+        help="stop after S seconds (default 0: until Ctrl-C/SIGTERM)",
+    )
+    parser.add_argument(
+        "--compression",
+        choices=tuple(COMPRESSIONS),
+        default="zstd",
+        help="chunk compression (default %(default)s)",
+    )
+    parser.add_argument(
+        "--connect-timeout",
+        type=non_negative_seconds,
+        default=10.0,
+        metavar="S",
+        help="seconds to keep trying to reach the bridge",
+    )
+    parser.add_argument(
+        "--log-level", default="INFO", choices=("DEBUG", "INFO", "WARNING", "ERROR")
+    )
     return parser
 
 
 def summary(recorder: Recorder, counts: dict[str, TopicCounts]) -> str:
-    lines = [f"wrote {recorder.output}: {recorder.stats.messages} messages, "
-             f"{recorder.stats.bytes / 1e6:.1f} MB on {len(counts)} topics"]
-    lines += [f"  {topic:<32} {c.messages:>7} msgs {c.bytes / 1e6:>9.2f} MB  {c.type_name}"
-              for topic, c in sorted(counts.items())]
+    lines = [
+        f"wrote {recorder.output}: {recorder.stats.messages} messages, "
+        f"{recorder.stats.bytes / 1e6:.1f} MB on {len(counts)} topics"
+    ]
+    lines += [
+        f"  {topic:<32} {c.messages:>7} msgs {c.bytes / 1e6:>9.2f} MB  {c.type_name}"
+        for topic, c in sorted(counts.items())
+    ]
     stats = recorder.stats
     if stats.dropped_backlog or stats.dropped_queue:
-        lines.append(f"  DROPPED: {stats.dropped_backlog} (writer backlog full), "
-                     f"{stats.dropped_queue} (receive queue full)")
+        lines.append(
+            f"  DROPPED: {stats.dropped_backlog} (writer backlog full), "
+            f"{stats.dropped_queue} (receive queue full)"
+        )
     lines += [f"  not recorded: {topic}: {why}" for topic, why in stats.skipped_topics.items()]
     return "\n".join(lines)
 
 
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
-    logging.basicConfig(level=args.log_level,
-                        format="%(asctime)s %(levelname)s %(name)s: %(message)s")
-    recorder = Recorder(args.bridge, args.output, topics=TopicFilter(tuple(args.topics)),
-                        compression=args.compression, connect_timeout_s=args.connect_timeout)
+    logging.basicConfig(
+        level=args.log_level, format="%(asctime)s %(levelname)s %(name)s: %(message)s"
+    )
+    recorder = Recorder(
+        args.bridge,
+        args.output,
+        topics=TopicFilter(tuple(args.topics)),
+        compression=args.compression,
+        connect_timeout_s=args.connect_timeout,
+    )
     counts: dict[str, TopicCounts] = {}
 
     async def serve(stop: asyncio.Event) -> None:

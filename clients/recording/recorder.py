@@ -67,11 +67,17 @@ class RecorderStats:
 class Recorder:
     """Records the topics of the bridge at ``url`` that ``topics`` takes into ``output``."""
 
-    def __init__(self, url: str, output: Path, *, topics: TopicFilter | None = None,
-                 compression: Compression = "zstd",
-                 discovery_period_s: float = DISCOVERY_PERIOD_S,
-                 max_backlog_bytes: int = MAX_BACKLOG_BYTES,
-                 connect_timeout_s: float = 10.0) -> None:
+    def __init__(
+        self,
+        url: str,
+        output: Path,
+        *,
+        topics: TopicFilter | None = None,
+        compression: Compression = "zstd",
+        discovery_period_s: float = DISCOVERY_PERIOD_S,
+        max_backlog_bytes: int = MAX_BACKLOG_BYTES,
+        connect_timeout_s: float = 10.0,
+    ) -> None:
         self.url = url
         self.output = output
         self.topics = topics or TopicFilter()
@@ -86,8 +92,9 @@ class Recorder:
         self._pool = ThreadPoolExecutor(1, thread_name_prefix="recorder-writer")
         self._file: McapRecording | None = None
 
-    async def run(self, stop: asyncio.Event,
-                  on_topic: Callable[[str, str], None] | None = None) -> dict[str, TopicCounts]:
+    async def run(
+        self, stop: asyncio.Event, on_topic: Callable[[str, str], None] | None = None
+    ) -> dict[str, TopicCounts]:
         """Record until ``stop`` is set; then finish the file. Returns what was written.
 
         on_topic : called with (topic, type) when a topic starts being recorded.
@@ -95,9 +102,11 @@ class Recorder:
         """
         loop = asyncio.get_running_loop()
         self._file = await loop.run_in_executor(
-            self._pool, lambda: McapRecording(self.output, self._compression))
-        client = RosbridgeClient(self.url, encoding="cbor", name="recorder",
-                                 connect_timeout=self._connect_timeout_s)
+            self._pool, lambda: McapRecording(self.output, self._compression)
+        )
+        client = RosbridgeClient(
+            self.url, encoding="cbor", name="recorder", connect_timeout=self._connect_timeout_s
+        )
         try:
             await client.connect()
             await self._discover_until(stop, client, on_topic)
@@ -109,8 +118,12 @@ class Recorder:
         self.stats.dropped_queue = sum(s.dropped for s in self._subscriptions.values())
         return dict(self._file.counts)
 
-    async def _discover_until(self, stop: asyncio.Event, client: RosbridgeClient,
-                              on_topic: Callable[[str, str], None] | None) -> None:
+    async def _discover_until(
+        self,
+        stop: asyncio.Event,
+        client: RosbridgeClient,
+        on_topic: Callable[[str, str], None] | None,
+    ) -> None:
         loop = asyncio.get_running_loop()
         while not stop.is_set():
             with contextlib.suppress(RosbridgeError, TimeoutError):
@@ -119,38 +132,47 @@ class Recorder:
             with contextlib.suppress(TimeoutError):
                 await asyncio.wait_for(stop.wait(), self._discovery_period_s)
 
-    async def _discover(self, client: RosbridgeClient,
-                        on_topic: Callable[[str, str], None] | None) -> None:
+    async def _discover(
+        self, client: RosbridgeClient, on_topic: Callable[[str, str], None] | None
+    ) -> None:
         """Subscribe to every topic the bridge lists that is new and wanted."""
         listing = await client.call_service("/rosapi/topics_and_raw_types", timeout=10.0)
-        for topic, type_name, definition in zip(listing.get("topics", []),
-                                                listing.get("types", []),
-                                                listing.get("typedefs_full_text", []),
-                                                strict=False):
+        for topic, type_name, definition in zip(
+            listing.get("topics", []),
+            listing.get("types", []),
+            listing.get("typedefs_full_text", []),
+            strict=False,
+        ):
             if topic in self._subscriptions or topic in self.stats.skipped_topics:
                 continue
             if not self.topics(topic):
                 continue
             if not definition:
                 self.stats.skipped_topics[topic] = f"the bridge has no definition of {type_name}"
-                log.warning("not recording %s: the bridge has no definition of %r (its messages "
-                            "cannot be serialized as CDR)", topic, type_name)
+                log.warning(
+                    "not recording %s: the bridge has no definition of %r (its messages "
+                    "cannot be serialized as CDR)",
+                    topic,
+                    type_name,
+                )
                 continue
             await self._start_topic(client, topic, type_name, definition)
             if on_topic is not None:
                 on_topic(topic, type_name)
 
-    async def _start_topic(self, client: RosbridgeClient, topic: str, type_name: str,
-                           definition: str) -> None:
+    async def _start_topic(
+        self, client: RosbridgeClient, topic: str, type_name: str, definition: str
+    ) -> None:
         assert self._file is not None
         recording = self._file
         await asyncio.get_running_loop().run_in_executor(
-            self._pool, recording.add_topic, topic, type_name, definition)
-        subscription = await client.subscribe(topic, compression="cbor-raw",
-                                              maxsize=QUEUE_MESSAGES)
+            self._pool, recording.add_topic, topic, type_name, definition
+        )
+        subscription = await client.subscribe(topic, compression="cbor-raw", maxsize=QUEUE_MESSAGES)
         self._subscriptions[topic] = subscription
-        self._readers.append(asyncio.create_task(self._read(topic, subscription),
-                                                 name=f"record {topic}"))
+        self._readers.append(
+            asyncio.create_task(self._read(topic, subscription), name=f"record {topic}")
+        )
         log.info("recording %s (%s)", topic, type_name)
 
     async def _read(self, topic: str, subscription: Subscription) -> None:

@@ -22,9 +22,12 @@ from schemas.catalogue import TOPICS
 
 STACK_PROCESSES = ("bridge", "simulator", "navigation")
 # What the detection quality reads (docs/quality.md): the truth and navigation's outputs.
-QUALITY_TOPICS = {"lidar_truth": TOPICS["lidar_truth"].pair,
-                  "radar_truth": TOPICS["radar_truth"].pair,
-                  "boxes": TOPICS["boxes"].pair, "radar": TOPICS["radar_detections"].pair}
+QUALITY_TOPICS = {
+    "lidar_truth": TOPICS["lidar_truth"].pair,
+    "radar_truth": TOPICS["radar_truth"].pair,
+    "boxes": TOPICS["boxes"].pair,
+    "radar": TOPICS["radar_detections"].pair,
+}
 
 Message = Mapping[str, Any]
 
@@ -60,20 +63,33 @@ def build_run(seen: Observations) -> Run:
     grouped = by_topic(journeys(seen.spans))
     topics = {t: topic_summary(t, items, seen.duration_s) for t, items in grouped.items()}
     processes = process_summary(seen.process_stats)
-    network = network_summary(topics, seen.loopback_bytes, seen.duration_s,
-                              stack_traffic(seen, processes))
+    network = network_summary(
+        topics, seen.loopback_bytes, seen.duration_s, stack_traffic(seen, processes)
+    )
     profile, water_model, point_fields = simulator_settings(seen.sim_config, seen.profile)
-    return Run(encoding=seen.encoding, duration_s=seen.duration_s, hosts=tuple(hosts_of(
-        seen.spans)), spans=len(seen.spans), topics=topics, samples=dict(seen.samples or {}),
-        processes=processes, network=network, bridge=dict(seen.bridge_stats or {}),
-        machine=seen.machine, detection_quality=detection_quality(seen.judged or {}),
-        profile=profile, water_model=water_model, point_fields=point_fields,
+    return Run(
+        encoding=seen.encoding,
+        duration_s=seen.duration_s,
+        hosts=tuple(hosts_of(seen.spans)),
+        spans=len(seen.spans),
+        topics=topics,
+        samples=dict(seen.samples or {}),
+        processes=processes,
+        network=network,
+        bridge=dict(seen.bridge_stats or {}),
+        machine=seen.machine,
+        detection_quality=detection_quality(seen.judged or {}),
+        profile=profile,
+        water_model=water_model,
+        point_fields=point_fields,
         thesis_comparison=thesis_comparison(Measured(topics, network)),
-        stage_values={t: stage_values(items) for t, items in grouped.items()})
+        stage_values={t: stage_values(items) for t, items in grouped.items()},
+    )
 
 
-def stack_traffic(seen: Observations,
-                  processes: Mapping[str, ProcessSummary]) -> SocketTraffic | None:
+def stack_traffic(
+    seen: Observations, processes: Mapping[str, ProcessSummary]
+) -> SocketTraffic | None:
     """What the stack's processes' sockets sent in the window (clients.report.sockets)."""
     if seen.sockets_before is None or seen.sockets_after is None:
         return None
@@ -85,12 +101,12 @@ def detection_quality(judged: Mapping[str, Sequence[Message]]) -> DetectionQuali
     """Precision and recall of LIDAR boxes and radar targets (clients.report.quality)."""
     lidar = pair_by_stamp(judged.get("lidar_truth", ()), judged.get("boxes", ()))
     radar = pair_by_stamp(judged.get("radar_truth", ()), judged.get("radar", ()))
-    return DetectionQuality(lidar=lidar_quality(lidar) if lidar else None,
-                            radar=radar_quality(radar) if radar else None)
+    return DetectionQuality(
+        lidar=lidar_quality(lidar) if lidar else None, radar=radar_quality(radar) if radar else None
+    )
 
 
-def simulator_settings(config_msg: Message | None,
-                       profile: str | None) -> tuple[str, str, str]:
+def simulator_settings(config_msg: Message | None, profile: str | None) -> tuple[str, str, str]:
     """The profile, LIDAR water model and point fields the simulator ran with (its latched
     /sim/config); ``profile`` (else "unknown") and "unknown" where it does not say."""
     try:
@@ -100,8 +116,11 @@ def simulator_settings(config_msg: Message | None,
     config = config if isinstance(config, dict) else {}
     lidar = config.get("lidar")
     lidar = lidar if isinstance(lidar, dict) else {}
-    return (str(config.get("profile", profile or "unknown")),
-            str(lidar.get("water_model", "unknown")), str(lidar.get("point_fields", "unknown")))
+    return (
+        str(config.get("profile", profile or "unknown")),
+        str(lidar.get("water_model", "unknown")),
+        str(lidar.get("point_fields", "unknown")),
+    )
 
 
 def describe_sample(topic: str, msg: Message) -> str:

@@ -73,13 +73,23 @@ def profile_sim_config(profile: str, sim_config: Path | None, folder: Path) -> P
     return path
 
 
-async def run_stack(encoding: Encoding, args: argparse.Namespace, progress: Progress,
-                    log_stream: TextIO, profile: str = "default",
-                    sim_config: Path | None = None) -> Run:
+async def run_stack(
+    encoding: Encoding,
+    args: argparse.Namespace,
+    progress: Progress,
+    log_stream: TextIO,
+    profile: str = "default",
+    sim_config: Path | None = None,
+) -> Run:
     """Start the stack with ``encoding`` and the simulator's ``sim_config``, measure it,
     stop it. Raises RuntimeError."""
-    config = LaunchConfig(port=0, encoding=encoding, sim_config=sim_config,
-                          nav_config=args.nav_config, startup_timeout_s=args.startup_timeout)
+    config = LaunchConfig(
+        port=0,
+        encoding=encoding,
+        sim_config=sim_config,
+        nav_config=args.nav_config,
+        startup_timeout_s=args.startup_timeout,
+    )
     stop = asyncio.Event()
     measuring: list[asyncio.Task[Run]] = []
     label = encoding if profile == "default" else f"{profile}/{encoding}"
@@ -87,8 +97,9 @@ async def run_stack(encoding: Encoding, args: argparse.Namespace, progress: Prog
     def on_ready(url: str) -> None:
         progress.message(f"{label}: stack ready at {url}")
         name = f"{encoding} replay" if args.replay is not None else encoding
-        task = asyncio.create_task(measure(url, name, args.duration, args.warmup, progress,
-                                           profile))
+        task = asyncio.create_task(
+            measure(url, name, args.duration, args.warmup, progress, profile)
+        )
         task.add_done_callback(lambda _: stop.set())
         measuring.append(task)
 
@@ -98,11 +109,11 @@ async def run_stack(encoding: Encoding, args: argparse.Namespace, progress: Prog
         components = (bridge, player_component(args.replay, args.replay_topics), navigation)
     if args.record is not None:
         runs = len(args.encoding) * len(args.profile)
-        components += (recorder_component(record_path(args.record, label.replace("/", "-"),
-                                                      runs)),)
+        components += (recorder_component(record_path(args.record, label.replace("/", "-"), runs)),)
     progress.message(f"{label}: starting " + ", ".join(c.title for c in components))
-    supervisor = Supervisor(components, config,
-                            PrefixedOutput(log_stream, colour=False), on_ready=on_ready)
+    supervisor = Supervisor(
+        components, config, PrefixedOutput(log_stream, colour=False), on_ready=on_ready
+    )
     status = await supervisor.run(stop)
     if not measuring:
         raise RuntimeError(f"the {label} stack did not start (exit status {status})")
@@ -118,12 +129,14 @@ async def run_stack(encoding: Encoding, args: argparse.Namespace, progress: Prog
 
 def _choices(allowed: tuple[str, ...]) -> Callable[[str], tuple[str, ...]]:
     """A comma-separated list of names from ``allowed``, for argparse."""
+
     def parse(text: str) -> tuple[str, ...]:
         names = tuple(name.strip() for name in text.split(",") if name.strip())
         unknown = [name for name in names if name not in allowed]
         if not names or unknown:
             raise argparse.ArgumentTypeError(f"choose from {', '.join(allowed)}, got {text!r}")
         return names
+
     return parse
 
 
@@ -139,34 +152,69 @@ def _existing_file(text: str) -> Path:
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
-        prog="riverbridge report", description="Run the stack (or attach to a running one) "
-        "and report per topic and stage where time and bytes go, next to the thesis's figures.")
-    parser.add_argument("--duration", type=positive_seconds, default=30.0, metavar="S",
-                        help="seconds to measure per encoding (default %(default)s)")
-    parser.add_argument("--warmup", type=positive_seconds, default=5.0, metavar="S",
-                        help="seconds to let the stack settle first (default %(default)s)")
-    parser.add_argument("--encoding", type=_encodings, default=("cbor",), metavar="LIST",
-                        help="comma-separated encodings to run in turn: json, cbor "
-                        "(default cbor; ignored with --bridge)")
-    parser.add_argument("--profile", type=_choices(PROFILES), default=("default",),
-                        metavar="LIST", help="comma-separated simulator payload profiles to run "
-                        "in turn: default, thesis (the thesis's LIDAR payload, docs/report.md; "
-                        "default: default; ignored with --bridge)")
-    parser.add_argument("--bridge", metavar="URL",
-                        help="attach to the running stack at ws://HOST:PORT instead")
+        prog="riverbridge report",
+        description="Run the stack (or attach to a running one) "
+        "and report per topic and stage where time and bytes go, next to the thesis's figures.",
+    )
+    parser.add_argument(
+        "--duration",
+        type=positive_seconds,
+        default=30.0,
+        metavar="S",
+        help="seconds to measure per encoding (default %(default)s)",
+    )
+    parser.add_argument(
+        "--warmup",
+        type=positive_seconds,
+        default=5.0,
+        metavar="S",
+        help="seconds to let the stack settle first (default %(default)s)",
+    )
+    parser.add_argument(
+        "--encoding",
+        type=_encodings,
+        default=("cbor",),
+        metavar="LIST",
+        help="comma-separated encodings to run in turn: json, cbor "
+        "(default cbor; ignored with --bridge)",
+    )
+    parser.add_argument(
+        "--profile",
+        type=_choices(PROFILES),
+        default=("default",),
+        metavar="LIST",
+        help="comma-separated simulator payload profiles to run "
+        "in turn: default, thesis (the thesis's LIDAR payload, docs/report.md; "
+        "default: default; ignored with --bridge)",
+    )
+    parser.add_argument(
+        "--bridge", metavar="URL", help="attach to the running stack at ws://HOST:PORT instead"
+    )
     parser.add_argument("--json", type=Path, metavar="FILE", help="write everything as JSON")
     parser.add_argument("--plots", type=Path, metavar="DIR", help="write PNG box plots here")
     parser.add_argument("--sim-config", type=_existing_file, metavar="FILE")
     parser.add_argument("--nav-config", type=_existing_file, metavar="FILE")
     parser.add_argument("--startup-timeout", type=positive_seconds, default=120.0, metavar="S")
-    parser.add_argument("--log", type=Path, metavar="FILE",
-                        help="where the stack's logs go (default: a file in the temp folder)")
-    parser.add_argument("--record", type=output_file, metavar="FILE.mcap",
-                        help="also record every topic into this MCAP file (one file per "
-                        "encoding, FILE.<encoding>.mcap, when several run)")
-    parser.add_argument("--replay", type=recording_file, metavar="FILE.mcap",
-                        help="measure on a recording: bridge, navigation and a player of the "
-                        "recording's sensor topics (looped), no simulator")
+    parser.add_argument(
+        "--log",
+        type=Path,
+        metavar="FILE",
+        help="where the stack's logs go (default: a file in the temp folder)",
+    )
+    parser.add_argument(
+        "--record",
+        type=output_file,
+        metavar="FILE.mcap",
+        help="also record every topic into this MCAP file (one file per "
+        "encoding, FILE.<encoding>.mcap, when several run)",
+    )
+    parser.add_argument(
+        "--replay",
+        type=recording_file,
+        metavar="FILE.mcap",
+        help="measure on a recording: bridge, navigation and a player of the "
+        "recording's sensor topics (looped), no simulator",
+    )
     return parser
 
 
@@ -177,19 +225,23 @@ def check_paths(parser: argparse.ArgumentParser, args: argparse.Namespace) -> No
     for option, path in (("--json", args.json), ("--log", args.log)):
         if path is not None and (path.is_dir() or not path.parent.is_dir()):
             parser.error(f"argument {option}: cannot write {path}")
-    if args.sim_config is not None and "default" not in args.profile and _sets_profile(
-            args.sim_config):
+    if (
+        args.sim_config is not None
+        and "default" not in args.profile
+        and _sets_profile(args.sim_config)
+    ):
         parser.error(f"argument --profile: {args.sim_config} sets profile itself; drop one")
     if args.replay is not None:
         if args.bridge is not None:
             parser.error("argument --replay: starts its own stack; leave out --bridge")
         if tuple(args.profile) != ("default",):
-            parser.error("argument --replay: the recording sets the payload; leave out "
-                         "--profile")
+            parser.error("argument --replay: the recording sets the payload; leave out --profile")
         args.replay_topics = [t for t in SIMULATOR_TOPICS if t in recorded_topics(args.replay)]
         if not args.replay_topics:
-            parser.error(f"argument --replay: {args.replay} has none of the simulator's "
-                         f"topics ({', '.join(SIMULATOR_TOPICS)})")
+            parser.error(
+                f"argument --replay: {args.replay} has none of the simulator's "
+                f"topics ({', '.join(SIMULATOR_TOPICS)})"
+            )
     if args.plots is not None:
         try:
             args.plots.mkdir(parents=True, exist_ok=True)
@@ -207,26 +259,26 @@ def _sets_profile(path: Path) -> bool:
         return False
 
 
-async def _run_all(args: argparse.Namespace, progress: Progress,
-                   log_stream: TextIO) -> list[Run]:
+async def _run_all(args: argparse.Namespace, progress: Progress, log_stream: TextIO) -> list[Run]:
     if args.bridge is not None:
         if args.record is None:
-            return [await measure(args.bridge, "attached", args.duration, args.warmup,
-                                  progress)]
+            return [await measure(args.bridge, "attached", args.duration, args.warmup, progress)]
         async with recorder_process(args.bridge, args.record):
-            return [await measure(args.bridge, "attached", args.duration, args.warmup,
-                                  progress)]
+            return [await measure(args.bridge, "attached", args.duration, args.warmup, progress)]
     runs = []
     with tempfile.TemporaryDirectory(prefix="riverbridge-report-") as folder:
         for profile in args.profile:
             sim_config = profile_sim_config(profile, args.sim_config, Path(folder))
-            runs += [await run_stack(encoding, args, progress, log_stream, profile, sim_config)
-                     for encoding in args.encoding]
+            runs += [
+                await run_stack(encoding, args, progress, log_stream, profile, sim_config)
+                for encoding in args.encoding
+            ]
     return runs
 
 
-def main(argv: list[str] | None = None, *, stdout: TextIO | None = None,
-         stderr: TextIO | None = None) -> int:
+def main(
+    argv: list[str] | None = None, *, stdout: TextIO | None = None, stderr: TextIO | None = None
+) -> int:
     out, err = stdout or sys.stdout, stderr or sys.stderr
     parser = build_parser()
     try:
@@ -245,13 +297,14 @@ def main(argv: list[str] | None = None, *, stdout: TextIO | None = None,
     return _emit(runs, args, out, progress)
 
 
-def _emit(runs: Sequence[Run], args: argparse.Namespace, out: TextIO,
-          progress: Progress) -> int:
+def _emit(runs: Sequence[Run], args: argparse.Namespace, out: TextIO, progress: Progress) -> int:
     write: Callable[[str], Any] = out.write
     if args.replay is not None:
-        write(f"REPLAY of {args.replay}: {', '.join(args.replay_topics)} played from the "
-              "recording (looped, header stamps shifted to capture time on today's clock); "
-              "no simulator ran, so there is no generate stage.\n\n")
+        write(
+            f"REPLAY of {args.replay}: {', '.join(args.replay_topics)} played from the "
+            "recording (looped, header stamps shifted to capture time on today's clock); "
+            "no simulator ran, so there is no generate stage.\n\n"
+        )
     for run in runs:
         write(render_run(run) + "\n\n")
     if len(runs) > 1:
@@ -270,10 +323,14 @@ def _emit(runs: Sequence[Run], args: argparse.Namespace, out: TextIO,
 def json_document(runs: Sequence[Run], replay: Path | None = None) -> dict[str, Any]:
     """The ``--json`` document: every run, and the thesis rows of all runs in one list, each
     tagged with its run (docs/report.md)."""
-    return {"runs": json_ready(runs), "sensor_topics": list(SENSOR_TOPICS),
-            "thesis_comparison": [{"run": run.label, **json_ready(row)} for run in runs
-                                  for row in run.thesis_comparison],
-            "replay": str(replay) if replay is not None else None}
+    return {
+        "runs": json_ready(runs),
+        "sensor_topics": list(SENSOR_TOPICS),
+        "thesis_comparison": [
+            {"run": run.label, **json_ready(row)} for run in runs for row in run.thesis_comparison
+        ],
+        "replay": str(replay) if replay is not None else None,
+    }
 
 
 if __name__ == "__main__":

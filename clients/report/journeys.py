@@ -14,8 +14,19 @@ from dataclasses import dataclass, field
 from typing import Any, NamedTuple
 
 # Stages in path order: recorded spans plus the two hops between processes.
-STAGES = ("generate", "publish_wait", "encode", "send", "pub_to_bridge", "bridge_in", "fanout",
-          "bridge_to_sub", "decode", "wait", "process")
+STAGES = (
+    "generate",
+    "publish_wait",
+    "encode",
+    "send",
+    "pub_to_bridge",
+    "bridge_in",
+    "fanout",
+    "bridge_to_sub",
+    "decode",
+    "wait",
+    "process",
+)
 TRANSPORT = "transport"  # publisher ready (generate.end) -> subscriber decoded (decode.end)
 RESULT = "result"  # publisher ready -> processing done (scan -> boxes)
 STEP_PREFIX = "process."
@@ -42,9 +53,21 @@ class SpanRecord(NamedTuple):
 def spans_of_batch(batch: Mapping[str, Any]) -> list[SpanRecord]:
     """The spans of one TraceSpanArray message (canonical dict)."""
     host = batch.get("host", "")
-    return [SpanRecord(s["topic"], int(s["stamp_ns"]), s["stage"], s["process"], s["peer"],
-                       int(s["start_ns"]), int(s["end_ns"]), int(s["payload_bytes"]),
-                       int(s["wire_bytes"]), host) for s in batch.get("spans", [])]
+    return [
+        SpanRecord(
+            s["topic"],
+            int(s["stamp_ns"]),
+            s["stage"],
+            s["process"],
+            s["peer"],
+            int(s["start_ns"]),
+            int(s["end_ns"]),
+            int(s["payload_bytes"]),
+            int(s["wire_bytes"]),
+            host,
+        )
+        for s in batch.get("spans", [])
+    ]
 
 
 @dataclass
@@ -64,13 +87,13 @@ def _ms(start_ns: int, end_ns: int) -> float:
     return (end_ns - start_ns) / NS_PER_MS
 
 
-def _publisher_side(spans: Sequence[SpanRecord]
-                    ) -> tuple[dict[str, float], dict[str, SpanRecord]]:
+def _publisher_side(spans: Sequence[SpanRecord]) -> tuple[dict[str, float], dict[str, SpanRecord]]:
     """Durations up to the bridge, and the spans the hops need (first of each stage)."""
     first: dict[str, SpanRecord] = {}
     for span in spans:
-        if span.stage not in ("fanout", "decode", "wait", "process") and \
-                not span.stage.startswith(STEP_PREFIX):
+        if span.stage not in ("fanout", "decode", "wait", "process") and not span.stage.startswith(
+            STEP_PREFIX
+        ):
             first.setdefault(span.stage, span)
     durations = {stage: _ms(s.start_ns, s.end_ns) for stage, s in first.items()}
     if "send" in first and "bridge_in" in first:
@@ -80,8 +103,9 @@ def _publisher_side(spans: Sequence[SpanRecord]
     return durations, first
 
 
-def _subscriber_side(spans: Sequence[SpanRecord], subscriber: str,
-                     fanouts: Sequence[SpanRecord]) -> dict[str, float]:
+def _subscriber_side(
+    spans: Sequence[SpanRecord], subscriber: str, fanouts: Sequence[SpanRecord]
+) -> dict[str, float]:
     """Durations of `subscriber`'s stages and the bridge -> subscriber hop."""
     mine = {s.stage: s for s in spans if s.process == subscriber}
     durations = {stage: _ms(s.start_ns, s.end_ns) for stage, s in mine.items()}
@@ -123,8 +147,9 @@ def journeys(spans: Iterable[SpanRecord]) -> list[Journey]:
     return out
 
 
-def _add_end_to_end(journey: Journey, first: Mapping[str, SpanRecord],
-                    group: Sequence[SpanRecord], subscriber: str) -> None:
+def _add_end_to_end(
+    journey: Journey, first: Mapping[str, SpanRecord], group: Sequence[SpanRecord], subscriber: str
+) -> None:
     generate = first.get("generate")
     encode = first.get("encode")  # a replay (riverbridge play) has no generate: ready = encode
     if generate is not None:
@@ -164,5 +189,4 @@ def hosts_of(spans: Iterable[SpanRecord]) -> list[str]:
 def stage_order(names: Iterable[str]) -> list[str]:
     """`names` in path order: stages, end-to-end columns, then processing sub-steps."""
     present = set(names)
-    return [s for s in ROW_ORDER if s in present] + sorted(
-        s for s in present if s not in ROW_ORDER)
+    return [s for s in ROW_ORDER if s in present] + sorted(s for s in present if s not in ROW_ORDER)

@@ -78,7 +78,8 @@ async def read_sockets() -> list[SocketBytes] | None:
     ``ss`` (iproute2)."""
     try:
         process = await asyncio.create_subprocess_exec(
-            *SS_COMMAND, stdout=asyncio.subprocess.PIPE, stderr=asyncio.subprocess.DEVNULL)
+            *SS_COMMAND, stdout=asyncio.subprocess.PIPE, stderr=asyncio.subprocess.DEVNULL
+        )
     except OSError:
         return None
     out, _ = await process.communicate()
@@ -98,21 +99,31 @@ async def sample_payloads(client: RosbridgeClient, timeout_s: float = 3.0) -> di
     return samples
 
 
-def _in_window(messages: list[dict[str, Any]], start_ns: int, end_ns: float
-               ) -> list[dict[str, Any]]:
+def _in_window(
+    messages: list[dict[str, Any]], start_ns: int, end_ns: float
+) -> list[dict[str, Any]]:
     return [m for m in messages if start_ns <= (header_stamp_ns(m) or 0) <= end_ns]
 
 
-async def measure(url: str, encoding: str, duration_s: float, warmup_s: float,
-                  progress: Progress, profile: str | None = None) -> Run:
+async def measure(
+    url: str,
+    encoding: str,
+    duration_s: float,
+    warmup_s: float,
+    progress: Progress,
+    profile: str | None = None,
+) -> Run:
     """Read the telemetry of the stack at ``url`` for ``duration_s`` after ``warmup_s``."""
     label = encoding if profile in (None, "default") else f"{profile}/{encoding}"
-    async with RosbridgeClient(url, encoding="cbor", name="report", reconnect=False,
-                               connect_timeout=3.0) as client:
+    async with RosbridgeClient(
+        url, encoding="cbor", name="report", reconnect=False, connect_timeout=3.0
+    ) as client:
         trace = await client.subscribe(TRACE_TOPIC, TRACE_TYPE, maxsize=100_000)
         stats = await client.subscribe(STATS_TOPIC, STATS_TYPE, maxsize=100_000)
-        quality = {key: await client.subscribe(topic, type_name, maxsize=1000)
-                   for key, (topic, type_name) in QUALITY_TOPICS.items()}
+        quality = {
+            key: await client.subscribe(topic, type_name, maxsize=1000)
+            for key, (topic, type_name) in QUALITY_TOPICS.items()
+        }
         sim_config = await client.subscribe(*SIM_CONFIG, maxsize=1)
         await _wait(warmup_s, f"{label} warm-up", progress)
         for sub in quality.values():
@@ -123,21 +134,31 @@ async def measure(url: str, encoding: str, duration_s: float, warmup_s: float,
         load = os.getloadavg()
         await _wait(TAIL_S, f"{label} collecting", progress)
         bridge_stats = await client.call_service(STATS_SERVICE, type=STATS_SERVICE_TYPE)
-        spans = [s for batch in _drain(trace) for s in spans_of_batch(batch)
-                 if start_ns <= s.stamp_ns <= end_ns]
+        spans = [
+            s
+            for batch in _drain(trace)
+            for s in spans_of_batch(batch)
+            if start_ns <= s.stamp_ns <= end_ns
+        ]
         config = _drain(sim_config)
         seen = Observations(
-            encoding=encoding, duration_s=(end_ns - start_ns) / NS_PER_S, spans=spans,
+            encoding=encoding,
+            duration_s=(end_ns - start_ns) / NS_PER_S,
+            spans=spans,
             process_stats=_in_window(_drain(stats), start_ns, end_ns + TAIL_S * NS_PER_S),
             bridge_stats=bridge_stats,
-            judged={key: _in_window(_drain(sub), start_ns, end_ns)
-                    for key, sub in quality.items()},
+            judged={key: _in_window(_drain(sub), start_ns, end_ns) for key, sub in quality.items()},
             sim_config=config[-1] if config else None,
             samples=await sample_payloads(client),
-            loopback_bytes=(lo_end - lo_start if lo_start is not None and lo_end is not None
-                            else None),
-            sockets_before=ss_start, sockets_after=ss_end, report_pid=os.getpid(),
-            machine=Machine(os.cpu_count(), load), profile=profile)
+            loopback_bytes=(
+                lo_end - lo_start if lo_start is not None and lo_end is not None else None
+            ),
+            sockets_before=ss_start,
+            sockets_after=ss_end,
+            report_pid=os.getpid(),
+            machine=Machine(os.cpu_count(), load),
+            profile=profile,
+        )
     return build_run(seen)
 
 

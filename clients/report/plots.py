@@ -47,15 +47,21 @@ def _bytes_chart(runs: Sequence[Run], folder: Path, plt: Any) -> Path:
     width = 0.8 / (1 + 2 * len(runs))
     positions = list(range(len(topics)))
     first = runs[0].topics
-    ax.bar(positions, [first[t].payload_bytes if t in first else 0 for t in topics], width,
-           label="payload (CDR)")
+    ax.bar(
+        positions,
+        [first[t].payload_bytes if t in first else 0 for t in topics],
+        width,
+        label="payload (CDR)",
+    )
     for k, run in enumerate(runs, start=1):
-        ax.bar([p + k * width for p in positions],
-               [summary.wire_in_bytes if (summary := run.topic(t)) else 0 for t in topics],
-               width, label=f"wire ({run.label})")
+        ax.bar(
+            [p + k * width for p in positions],
+            [summary.wire_in_bytes if (summary := run.topic(t)) else 0 for t in topics],
+            width,
+            label=f"wire ({run.label})",
+        )
     ax.set_yscale("log")
-    ax.set_xticks([p + width * len(runs) / 2 for p in positions], topics, rotation=30,
-                  ha="right")
+    ax.set_xticks([p + width * len(runs) / 2 for p in positions], topics, rotation=30, ha="right")
     ax.set_ylabel("bytes per message")
     ax.legend()
     fig.tight_layout()

@@ -52,9 +52,11 @@ def inside_objects(centres: np.ndarray, objects: list[Msg], margin_m: float) -> 
     c, s = np.cos(yaw)[None], np.sin(yaw)[None]
     along = c * d[..., 0] + s * d[..., 1]
     across = -s * d[..., 0] + c * d[..., 1]
-    inside: np.ndarray = ((np.abs(along) <= half[None, :, 0])
-                          & (np.abs(across) <= half[None, :, 1])
-                          & (np.abs(d[..., 2]) <= half[None, :, 2]))
+    inside: np.ndarray = (
+        (np.abs(along) <= half[None, :, 0])
+        & (np.abs(across) <= half[None, :, 1])
+        & (np.abs(d[..., 2]) <= half[None, :, 2])
+    )
     return inside
 
 
@@ -62,35 +64,54 @@ def lidar_scan_counts(truth: Msg, boxes: Msg) -> LidarCounts:
     """One scan: boxes, true boxes, visible objects, detected visible objects."""
     objects = list(truth["objects"])
     items = list(boxes["boxes"])
-    centres = np.array([[(a + b) / 2 for a, b in zip(_xyz(box["min"]), _xyz(box["max"]),
-                                                     strict=True)] for box in items])
+    centres = np.array(
+        [
+            [(a + b) / 2 for a, b in zip(_xyz(box["min"]), _xyz(box["max"]), strict=True)]
+            for box in items
+        ]
+    )
     inside = inside_objects(centres.reshape(-1, 3), objects, MATCH_MARGIN_M)
-    visible = np.array([int(o["returns"]) >= LIDAR_MIN_RETURNS
-                        and float(o["range_m"]) <= EVALUATION_RANGE_M for o in objects], bool)
+    visible = np.array(
+        [
+            int(o["returns"]) >= LIDAR_MIN_RETURNS and float(o["range_m"]) <= EVALUATION_RANGE_M
+            for o in objects
+        ],
+        bool,
+    )
     detected = inside.any(axis=0) & visible
-    return LidarCounts(boxes=len(items), true_boxes=int(inside.any(axis=1).sum()),
-                       visible_objects=int(visible.sum()), detected_objects=int(detected.sum()))
+    return LidarCounts(
+        boxes=len(items),
+        true_boxes=int(inside.any(axis=1).sum()),
+        visible_objects=int(visible.sum()),
+        detected_objects=int(detected.sum()),
+    )
 
 
 def radar_sweep_counts(truth: Msg, detections: Msg) -> RadarCounts:
     """One sweep: targets by what their strongest cell holds, objects, open-water cells."""
     source = np.asarray(truth["cell_source"], np.int64).reshape(
-        int(truth["num_beams"]), int(truth["num_cells"]))
+        int(truth["num_beams"]), int(truth["num_cells"])
+    )
     cells = [(int(d["beam"]), int(d["cell"])) for d in detections["detections"]]
     hit = np.zeros(source.shape, bool)
     if cells:
         hit[tuple(np.array(cells).T)] = True
-    peak = np.array([source[int(t["peak_beam"]), int(t["peak_cell"])]
-                     for t in detections["targets"]], np.int64)
+    peak = np.array(
+        [source[int(t["peak_beam"]), int(t["peak_cell"])] for t in detections["targets"]], np.int64
+    )
     visible = {int(o["id"]) for o in truth["objects"] if int(o["dominant_cells"]) > 0}
     detected = set(np.unique(source[hit & (source >= 0)]).tolist()) & visible
     open_water = (source == WATER) | (source == NO_RETURN)
-    return RadarCounts(targets=len(peak), on_object=int((peak >= 0).sum()),
-                       on_land=int((peak == LAND).sum()),
-                       on_open_water=int(((peak == WATER) | (peak == NO_RETURN)).sum()),
-                       visible_objects=len(visible), detected_objects=len(detected),
-                       open_water_cells=int(open_water.sum()),
-                       open_water_detections=int((hit & open_water).sum()))
+    return RadarCounts(
+        targets=len(peak),
+        on_object=int((peak >= 0).sum()),
+        on_land=int((peak == LAND).sum()),
+        on_open_water=int(((peak == WATER) | (peak == NO_RETURN)).sum()),
+        visible_objects=len(visible),
+        detected_objects=len(detected),
+        open_water_cells=int(open_water.sum()),
+        open_water_detections=int((hit & open_water).sum()),
+    )
 
 
 def _ratio(num: int, den: int) -> float:
@@ -101,11 +122,15 @@ def lidar_quality(pairs: Iterable[tuple[Msg, Msg]]) -> LidarQuality:
     """Precision and recall of the LIDAR boxes over (truth, boxes) pairs of the same scan."""
     counts = [lidar_scan_counts(truth, boxes) for truth, boxes in pairs]
     total = sum(counts, LidarCounts())
-    return LidarQuality(scans=len(counts), counts=total,
-                        precision=_ratio(total.true_boxes, total.boxes),
-                        recall=_ratio(total.detected_objects, total.visible_objects),
-                        min_returns=LIDAR_MIN_RETURNS, range_m=EVALUATION_RANGE_M,
-                        margin_m=MATCH_MARGIN_M)
+    return LidarQuality(
+        scans=len(counts),
+        counts=total,
+        precision=_ratio(total.true_boxes, total.boxes),
+        recall=_ratio(total.detected_objects, total.visible_objects),
+        min_returns=LIDAR_MIN_RETURNS,
+        range_m=EVALUATION_RANGE_M,
+        margin_m=MATCH_MARGIN_M,
+    )
 
 
 def radar_quality(pairs: Iterable[tuple[Msg, Msg]]) -> RadarQuality:
@@ -118,19 +143,24 @@ def radar_quality(pairs: Iterable[tuple[Msg, Msg]]) -> RadarQuality:
         counts.append(radar_sweep_counts(truth, detections))
     total = sum(counts, RadarCounts())
     return RadarQuality(
-        sweeps=len(counts), counts=total,
+        sweeps=len(counts),
+        counts=total,
         precision=_ratio(total.on_object + total.on_land, total.targets),
         recall=_ratio(total.detected_objects, total.visible_objects),
         open_water_false_alarm_rate=_ratio(total.open_water_detections, total.open_water_cells),
-        configured_false_alarm_rate=configured)
+        configured_false_alarm_rate=configured,
+    )
 
 
 def pair_by_stamp(truths: Iterable[Msg], outputs: Iterable[Msg]) -> list[tuple[Msg, Msg]]:
     """(truth, output) pairs whose header stamps are equal, in stamp order."""
+
     def key(msg: Msg) -> tuple[int, int]:
         stamp = msg["header"]["stamp"]
         return int(stamp["sec"]), int(stamp["nanosec"])
 
     by_stamp = {key(m): m for m in truths}
-    return sorted(((by_stamp[key(m)], m) for m in outputs if key(m) in by_stamp),
-                  key=lambda pair: key(pair[0]))
+    return sorted(
+        ((by_stamp[key(m)], m) for m in outputs if key(m) in by_stamp),
+        key=lambda pair: key(pair[0]),
+    )

@@ -268,8 +268,9 @@ class Run:
     water_model: str = "unknown"
     point_fields: str = "unknown"
     thesis_comparison: tuple[ThesisRow, ...] = ()
-    stage_values: Mapping[str, Mapping[str, list[float]]] = field(default_factory=dict,
-                                                                  metadata=JSON_NONE)
+    stage_values: Mapping[str, Mapping[str, list[float]]] = field(
+        default_factory=dict, metadata=JSON_NONE
+    )
 
     @property
     def label(self) -> str:

@@ -56,8 +56,9 @@ def _socket(fields: list[str], info: str) -> SocketBytes:
         return SocketBytes((), "", "")
     pids = tuple(int(p) for p in _PIDS.findall(" ".join(fields[4:])))
     counters = {name: int(value) for name, value in _COUNTER.findall(info)}
-    return SocketBytes(pids, fields[2], fields[3], counters.get("bytes_sent", 0),
-                       counters.get("bytes_received", 0))
+    return SocketBytes(
+        pids, fields[2], fields[3], counters.get("bytes_sent", 0), counters.get("bytes_received", 0)
+    )
 
 
 @dataclass(frozen=True)
@@ -71,9 +72,12 @@ class SocketTraffic:
     sockets: int
 
 
-def window_traffic(before: Iterable[SocketBytes], after: Iterable[SocketBytes],
-                   stack_pids: Mapping[int, str],
-                   instrument_pids: Iterable[int]) -> SocketTraffic | None:
+def window_traffic(
+    before: Iterable[SocketBytes],
+    after: Iterable[SocketBytes],
+    stack_pids: Mapping[int, str],
+    instrument_pids: Iterable[int],
+) -> SocketTraffic | None:
     """What the stack's sockets sent between two snapshots.
 
     stack_pids : pid -> process name of the stack (bridge, simulator, navigation).

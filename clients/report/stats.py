@@ -39,8 +39,14 @@ def percentiles(values_ms: Sequence[float]) -> StageStats:
         return StageStats(0)
     values = np.asarray(values_ms, dtype=np.float64)
     p50, p90, p99 = np.percentile(values, [50, 90, 99])
-    return StageStats(int(values.size), float(values.mean()), float(p50), float(p90),
-                      float(p99), float(values.max()))
+    return StageStats(
+        int(values.size),
+        float(values.mean()),
+        float(p50),
+        float(p90),
+        float(p99),
+        float(values.max()),
+    )
 
 
 def median_interval_ms(stamps_ns: Sequence[int]) -> float:
@@ -67,7 +73,9 @@ def topic_summary(topic: str, items: Sequence[Journey], duration_s: float) -> To
         messages=len(stamps),
         rate_hz=len(stamps) / duration_s if duration_s > 0 else math.nan,
         period_ms=period_ms,
-        payload_bytes=payload, wire_in_bytes=wire_in, wire_out_bytes=wire_out,
+        payload_bytes=payload,
+        wire_in_bytes=wire_in,
+        wire_out_bytes=wire_out,
         # the thesis's table 4.9 averages 100 messages: the mean, once per message
         payload_bytes_mean=float(np.mean(list(payloads.values()))) if payloads else 0.0,
         overhead_in=wire_in / payload if payload else math.nan,
@@ -77,7 +85,8 @@ def topic_summary(topic: str, items: Sequence[Journey], duration_s: float) -> To
         deadline_misses=sum(v > period_ms for v in stages.get(TRANSPORT, [])),
         result_deadline_misses=sum(v > period_ms for v in stages.get(RESULT, [])),
         unprocessed=unprocessed(items),
-        thesis=thesis_figures(topic))
+        thesis=thesis_figures(topic),
+    )
 
 
 def unprocessed(items: Sequence[Journey]) -> int:
@@ -111,8 +120,10 @@ def thesis_figures(topic: str) -> ThesisMeans:
 
 def summarise(spans: Iterable[SpanRecord], duration_s: float) -> dict[str, TopicSummary]:
     """Per topic summaries of every traced topic, topics sorted."""
-    return {topic: topic_summary(topic, items, duration_s)
-            for topic, items in by_topic(journeys(spans)).items()}
+    return {
+        topic: topic_summary(topic, items, duration_s)
+        for topic, items in by_topic(journeys(spans)).items()
+    }
 
 
 def process_summary(stats: Iterable[Mapping[str, Any]]) -> dict[str, ProcessSummary]:
@@ -132,12 +143,19 @@ def process_summary(stats: Iterable[Mapping[str, Any]]) -> dict[str, ProcessSumm
         cpu = [float(m["cpu_percent"]) for m in items]
         last = items[-1]
         out[process] = ProcessSummary(
-            process=process, samples=len(items), cpu_percent_mean=float(np.mean(cpu)),
+            process=process,
+            samples=len(items),
+            cpu_percent_mean=float(np.mean(cpu)),
             cpu_percent_max=float(np.max(cpu)),
-            rss_bytes_max=max(int(m["rss_bytes"]) for m in items), pid=int(last["pid"]),
-            host=str(last["host"]), messages_out=int(last["messages_out"]),
-            messages_in=int(last["messages_in"]), bytes_out=int(last["bytes_out"]),
-            bytes_in=int(last["bytes_in"]), dropped=int(last["dropped"]))
+            rss_bytes_max=max(int(m["rss_bytes"]) for m in items),
+            pid=int(last["pid"]),
+            host=str(last["host"]),
+            messages_out=int(last["messages_out"]),
+            messages_in=int(last["messages_in"]),
+            bytes_out=int(last["bytes_out"]),
+            bytes_in=int(last["bytes_in"]),
+            dropped=int(last["dropped"]),
+        )
     return out
 
 
@@ -152,12 +170,18 @@ def _over(num: float, den: float) -> float:
 def _bytes_per_s(topics: Iterable[TopicSummary]) -> tuple[float, float]:
     """(payload, websocket) bytes per second of ``topics``: per-message bytes x rate."""
     items = list(topics)
-    return (sum(t.payload_bytes * t.rate_hz for t in items),
-            sum(t.wire_in_bytes * t.rate_hz for t in items))
+    return (
+        sum(t.payload_bytes * t.rate_hz for t in items),
+        sum(t.wire_in_bytes * t.rate_hz for t in items),
+    )
 
 
-def network_summary(topics: Mapping[str, TopicSummary], loopback_bytes: int | None,
-                    duration_s: float, sockets: SocketTraffic | None = None) -> NetworkSummary:
+def network_summary(
+    topics: Mapping[str, TopicSummary],
+    loopback_bytes: int | None,
+    duration_s: float,
+    sockets: SocketTraffic | None = None,
+) -> NetworkSummary:
     """The network load the thesis's way (table 4.10 over table 4.9) and the encoding ratio.
 
     * ``stack_over_sensor_payload``: every byte the stack's TCP sockets sent in the window
@@ -170,11 +194,13 @@ def network_summary(topics: Mapping[str, TopicSummary], loopback_bytes: int | No
     """
     payload_bps, wire_bps = _bytes_per_s(topics.values())
     sensor_payload_bps, sensor_wire_bps = _bytes_per_s(
-        t for name, t in topics.items() if name in SENSOR_TOPICS)
+        t for name, t in topics.items() if name in SENSOR_TOPICS
+    )
     loopback_bps = _per_s(loopback_bytes, duration_s)
     stack_bps = _per_s(sockets.stack_bytes if sockets else None, duration_s)
     return NetworkSummary(
-        payload_bytes_per_s=payload_bps, wire_in_bytes_per_s=wire_bps,
+        payload_bytes_per_s=payload_bps,
+        wire_in_bytes_per_s=wire_bps,
         loopback_bytes_per_s=loopback_bps,
         wire_over_payload=_over(wire_bps, payload_bps),
         loopback_over_payload=_over(loopback_bps, payload_bps),
@@ -186,9 +212,12 @@ def network_summary(topics: Mapping[str, TopicSummary], loopback_bytes: int | No
         loopback_over_sensor_payload=_over(loopback_bps, sensor_payload_bps),
         stack_bytes_per_s_by_process={
             name: _per_s(count, duration_s)
-            for name, count in (sockets.by_process if sockets else {}).items()},
+            for name, count in (sockets.by_process if sockets else {}).items()
+        },
         report_connection_bytes_per_s=_per_s(
-            sockets.instrument_bytes if sockets else None, duration_s))
+            sockets.instrument_bytes if sockets else None, duration_s
+        ),
+    )
 
 
 def loopback_tx_bytes(proc_net_dev: str, interface: str = "lo") -> int | None:

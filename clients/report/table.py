@@ -83,17 +83,22 @@ def text_column(title: str, source: str | Callable[[Row], object]) -> Column[Row
     return Column(title, source, fmt_text, align="<")
 
 
-def render_table(columns: Sequence[Column[Row]], rows: Sequence[Row],
-                 indent: str = "  ") -> list[str]:
+def render_table(
+    columns: Sequence[Column[Row]], rows: Sequence[Row], indent: str = "  "
+) -> list[str]:
     """The header line and one line per row, columns two spaces apart, each as wide as its
     widest cell; trailing blanks stripped (a last text column is not padded)."""
     cells = [[column.cell(row) for column in columns] for row in rows]
-    widths = [max([len(column.header), *(len(line[k]) for line in cells)])
-              for k, column in enumerate(columns)]
+    widths = [
+        max([len(column.header), *(len(line[k]) for line in cells)])
+        for k, column in enumerate(columns)
+    ]
 
     def line(texts: Sequence[str]) -> str:
-        parts = [f"{text:{column.align}{width}}"
-                 for text, column, width in zip(texts, columns, widths, strict=True)]
+        parts = [
+            f"{text:{column.align}{width}}"
+            for text, column, width in zip(texts, columns, widths, strict=True)
+        ]
         return (indent + "  ".join(parts)).rstrip()
 
     return [line([column.header for column in columns]), *(line(texts) for texts in cells)]

@@ -138,32 +138,42 @@ def _stage_lines(summary: TopicSummary) -> list[StageLine]:
         if stage == TRANSPORT:
             notes.append(f"misses {summary.deadline_misses}/{stats.n}")
         if stage == RESULT:
-            notes.append(f"misses {summary.result_deadline_misses}/{stats.n}, "
-                         f"unprocessed {summary.unprocessed}")
+            notes.append(
+                f"misses {summary.result_deadline_misses}/{stats.n}, "
+                f"unprocessed {summary.unprocessed}"
+            )
         lines.append(StageLine(stage, stats, "; ".join(n for n in notes if n)))
     return lines
 
 
 def _header(run: Run) -> list[str]:
     hosts = run.hosts
-    lines = [f"== {run.label}: {run.duration_s:.1f} s measured on "
-             f"{', '.join(hosts) or 'unknown host'}"
-             + (" (HOSTS DIFFER: cross-process hops are not comparable)" if len(hosts) > 1
-                else "")]
+    lines = [
+        f"== {run.label}: {run.duration_s:.1f} s measured on "
+        f"{', '.join(hosts) or 'unknown host'}"
+        + (" (HOSTS DIFFER: cross-process hops are not comparable)" if len(hosts) > 1 else "")
+    ]
     if run.profile:
         lines.append(f"   payload profile {run.profile}; LIDAR water model {run.water_model}")
     if run.machine is not None:
         load = run.machine.load_average_1_5_15
-        lines.append(f"   machine: {run.machine.cpus} CPUs, load average {load[0]:.1f} / "
-                     f"{load[1]:.1f} / {load[2]:.1f} (1/5/15 min) at the window's end")
+        lines.append(
+            f"   machine: {run.machine.cpus} CPUs, load average {load[0]:.1f} / "
+            f"{load[1]:.1f} / {load[2]:.1f} (1/5/15 min) at the window's end"
+        )
     return lines
 
 
 def render_run(run: Run) -> str:
     """The human-readable report of one run (one profile and encoding)."""
     lines = _header(run)
-    lines += render_table(TOPIC_COLUMNS, [TopicLine(topic, summary, run.samples.get(topic, ""))
-                                          for topic, summary in run.topics.items()])
+    lines += render_table(
+        TOPIC_COLUMNS,
+        [
+            TopicLine(topic, summary, run.samples.get(topic, ""))
+            for topic, summary in run.topics.items()
+        ],
+    )
     for topic, summary in run.topics.items():
         stages = _stage_lines(summary)
         if stages:
@@ -181,8 +191,9 @@ def render_run(run: Run) -> str:
 
 
 def _network_lines(network: NetworkSummary) -> list[str]:
-    by_process = ", ".join(f"{name} {fmt_bytes(bps)}/s" for name, bps in
-                           network.stack_bytes_per_s_by_process.items())
+    by_process = ", ".join(
+        f"{name} {fmt_bytes(bps)}/s" for name, bps in network.stack_bytes_per_s_by_process.items()
+    )
     thesis = network.thesis
     return [
         f"  network, the thesis's way (table 4.10 / 4.9): the stack's sockets sent "
@@ -199,7 +210,8 @@ def _network_lines(network: NetworkSummary) -> list[str]:
         f"({', '.join(SENSOR_TOPICS)}) {fmt_ratio(network.sensor_wire_over_payload, 3)}, "
         f"all topics {fmt_ratio(network.wire_over_payload, 3)} "
         f"(payload {fmt_bytes(network.payload_bytes_per_s)}/s, wire "
-        f"{fmt_bytes(network.wire_in_bytes_per_s)}/s)"]
+        f"{fmt_bytes(network.wire_in_bytes_per_s)}/s)",
+    ]
 
 
 def _quality_lines(quality: DetectionQuality) -> list[str]:
@@ -212,7 +224,8 @@ def _quality_lines(quality: DetectionQuality) -> list[str]:
             f"{fmt_fraction(lidar.precision)} ({counts.true_boxes}/{counts.boxes} boxes on "
             f"objects), recall {fmt_fraction(lidar.recall)} ({counts.detected_objects}/"
             f"{counts.visible_objects} objects with >= {lidar.min_returns} returns within "
-            f"{lidar.range_m:g} m)")
+            f"{lidar.range_m:g} m)"
+        )
     if radar is not None:
         counts_r = radar.counts
         rows.append(
@@ -223,7 +236,8 @@ def _quality_lines(quality: DetectionQuality) -> list[str]:
             f"{counts_r.visible_objects} objects); open water: "
             f"{counts_r.open_water_detections}/{counts_r.open_water_cells} cells detected = "
             f"{fmt_fraction(radar.open_water_false_alarm_rate, 4)} (configured P_fa "
-            f"{radar.configured_false_alarm_rate:g})")
+            f"{radar.configured_false_alarm_rate:g})"
+        )
     return rows
 
 
@@ -258,6 +272,7 @@ def _stage_stat(stage: str, statistic: str) -> Callable[[TopicSummary], float | 
     def value(summary: TopicSummary) -> float | None:
         stats = summary.stage(stage)
         return getattr(stats, statistic) if stats is not None and stats.n else None
+
     return value
 
 
@@ -271,6 +286,7 @@ TOPIC_QUANTITIES: tuple[TopicQuantity, ...] = (
     TopicQuantity("encoding ratio", lambda summary: summary.overhead_in, fmt_ratio3),
 )
 
+
 def _overhead(run: Run) -> float | None:
     return run.network.stack_over_sensor_payload if run.network is not None else None
 
@@ -279,12 +295,19 @@ def _quality(sensor: str, figure: str) -> Callable[[Run], float | None]:
     def value(run: Run) -> float | None:
         quality = getattr(run.detection_quality, sensor)
         return None if quality is None else float(getattr(quality, figure))
+
     return value
 
 
 RUN_QUANTITIES: tuple[RunQuantity, ...] = (
-    RunQuantity("four sensor streams", "network overhead", _overhead, fmt_ratio,
-                f"{THESIS_NETWORK.overhead:.2f}x", "tables 4.10 / 4.9"),
+    RunQuantity(
+        "four sensor streams",
+        "network overhead",
+        _overhead,
+        fmt_ratio,
+        f"{THESIS_NETWORK.overhead:.2f}x",
+        "tables 4.10 / 4.9",
+    ),
     RunQuantity("lidar quality", "precision", _quality("lidar", "precision"), fmt_fraction),
     RunQuantity("lidar quality", "recall", _quality("lidar", "recall"), fmt_fraction),
     RunQuantity("radar quality", "precision", _quality("radar", "precision"), fmt_fraction),
@@ -296,16 +319,20 @@ def _topic_lines(runs: Sequence[Run], topic: str) -> list[ComparisonLine]:
     means = {(f.topic, f.stage): f for f in FIGURES if f.statistic == "mean" and f.stage}
     lines = []
     for quantity in TOPIC_QUANTITIES:
-        values = [None if (summary := run.topic(topic)) is None else quantity.value(summary)
-                  for run in runs]
+        values = [
+            None if (summary := run.topic(topic)) is None else quantity.value(summary)
+            for run in runs
+        ]
         if quantity.optional and all(v is None for v in values):
             continue
         figure = means.get((topic, quantity.stage)) if quantity.stage else None
         thesis = f"{figure.thesis:g}" if figure else ""
-        source = (figure.source + ("" if figure.comparable else " NOT COMPARABLE")
-                  if figure else "")
-        lines.append(ComparisonLine(topic, quantity.name,
-                                    tuple(quantity.fmt(v) for v in values), thesis, source))
+        source = figure.source + ("" if figure.comparable else " NOT COMPARABLE") if figure else ""
+        lines.append(
+            ComparisonLine(
+                topic, quantity.name, tuple(quantity.fmt(v) for v in values), thesis, source
+            )
+        )
     return lines
 
 
@@ -316,10 +343,16 @@ def render_comparison(runs: Sequence[Run]) -> str:
     for topic in SENSOR_TOPICS:
         if any(topic in run.topics for run in runs):
             lines += _topic_lines(runs, topic)
-    lines += [ComparisonLine(q.topic, q.name, tuple(q.fmt(q.value(run)) for run in runs),
-                             q.thesis, q.source) for q in RUN_QUANTITIES]
-    columns: list[Column[ComparisonLine]] = [text_column("topic", "topic"),
-                                             text_column("quantity", "quantity")]
+    lines += [
+        ComparisonLine(
+            q.topic, q.name, tuple(q.fmt(q.value(run)) for run in runs), q.thesis, q.source
+        )
+        for q in RUN_QUANTITIES
+    ]
+    columns: list[Column[ComparisonLine]] = [
+        text_column("topic", "topic"),
+        text_column("quantity", "quantity"),
+    ]
     columns += [Column(run.label, _cell(k)) for k, run in enumerate(runs)]
     columns += [Column("thesis", "thesis"), text_column("source", "source")]
     return "\n".join(render_table(columns, lines, indent=""))

@@ -43,8 +43,9 @@ def version_url(bridge_url: str) -> str:
     return urllib.parse.urlunsplit((schemes[parts.scheme], parts.netloc, "/version", "", ""))
 
 
-def fetch_version(bridge_url: str, timeout_s: float = DEFAULT_TIMEOUT_S,
-                  cafile: Path | None = None) -> dict[str, Any]:
+def fetch_version(
+    bridge_url: str, timeout_s: float = DEFAULT_TIMEOUT_S, cafile: Path | None = None
+) -> dict[str, Any]:
     """Blocking ``GET /version``; returns the JSON body. Raises :class:`Unhealthy`.
 
     ``cafile``: for https, trust this certificate instead of the default store.
@@ -61,19 +62,24 @@ def fetch_version(bridge_url: str, timeout_s: float = DEFAULT_TIMEOUT_S,
     return body
 
 
-async def missing_publishers(client: RosbridgeClient, topics: Sequence[str],
-                             timeout_s: float = DEFAULT_TIMEOUT_S) -> list[str]:
+async def missing_publishers(
+    client: RosbridgeClient, topics: Sequence[str], timeout_s: float = DEFAULT_TIMEOUT_S
+) -> list[str]:
     """The ``topics`` that have no publisher right now, in the given order."""
-    replies = await asyncio.gather(*(
-        client.call_service("/rosapi/publishers", {"topic": topic}, timeout=timeout_s)
-        for topic in topics
-    ))
-    return [topic for topic, reply in zip(topics, replies, strict=True)
-            if not reply.get("publishers")]
+    replies = await asyncio.gather(
+        *(
+            client.call_service("/rosapi/publishers", {"topic": topic}, timeout=timeout_s)
+            for topic in topics
+        )
+    )
+    return [
+        topic for topic, reply in zip(topics, replies, strict=True) if not reply.get("publishers")
+    ]
 
 
-async def check(bridge_url: str, topics: Sequence[str],
-                timeout_s: float = DEFAULT_TIMEOUT_S) -> dict[str, Any]:
+async def check(
+    bridge_url: str, topics: Sequence[str], timeout_s: float = DEFAULT_TIMEOUT_S
+) -> dict[str, Any]:
     """One full check: ``/version``, then the publishers of ``topics`` (if any).
 
     Returns the bridge's version body. Raises :class:`Unhealthy` naming what failed.
@@ -81,8 +87,9 @@ async def check(bridge_url: str, topics: Sequence[str],
     version = await asyncio.to_thread(fetch_version, bridge_url, timeout_s)
     if not topics:
         return version
-    client = RosbridgeClient(bridge_url, encoding="json", name="healthcheck",
-                             connect_timeout=timeout_s, reconnect=False)
+    client = RosbridgeClient(
+        bridge_url, encoding="json", name="healthcheck", connect_timeout=timeout_s, reconnect=False
+    )
     try:
         async with asyncio.timeout(timeout_s):
             await client.connect()
@@ -97,13 +104,23 @@ async def check(bridge_url: str, topics: Sequence[str],
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="python -m clients.stack.healthcheck",
-                                     description=__doc__.split("\n\n")[0])
+    parser = argparse.ArgumentParser(
+        prog="python -m clients.stack.healthcheck", description=__doc__.split("\n\n")[0]
+    )
     parser.add_argument("--bridge", default="ws://127.0.0.1:9090", help="rosbridge URL")
-    parser.add_argument("--topic", action="append", default=[], metavar="TOPIC",
-                        help="require a publisher on this topic (repeatable)")
-    parser.add_argument("--timeout", type=float, default=DEFAULT_TIMEOUT_S,
-                        help="seconds for the whole check (default %(default)s)")
+    parser.add_argument(
+        "--topic",
+        action="append",
+        default=[],
+        metavar="TOPIC",
+        help="require a publisher on this topic (repeatable)",
+    )
+    parser.add_argument(
+        "--timeout",
+        type=float,
+        default=DEFAULT_TIMEOUT_S,
+        help="seconds for the whole check (default %(default)s)",
+    )
     return parser
 
 

@@ -113,8 +113,11 @@ class LaunchConfig(BaseModel):
     def bridge_access_args(self) -> list[str]:
         """The bridge's command-line options for the access settings."""
         args: list[str] = []
-        for option, path in (("--auth-secret-file", self.auth_secret_file),
-                             ("--certfile", self.certfile), ("--keyfile", self.keyfile)):
+        for option, path in (
+            ("--auth-secret-file", self.auth_secret_file),
+            ("--certfile", self.certfile),
+            ("--keyfile", self.keyfile),
+        ):
             if path is not None:
                 args += [option, str(path)]
         if self.allowed_origins:
@@ -136,8 +139,12 @@ class Component:
     topics: tuple[str, ...] = ()
 
     def argv(self, bridge_url: str = "") -> list[str]:
-        return [sys.executable, "-m", self.module,
-                *(arg.replace(BRIDGE_URL, bridge_url) for arg in self.args)]
+        return [
+            sys.executable,
+            "-m",
+            self.module,
+            *(arg.replace(BRIDGE_URL, bridge_url) for arg in self.args),
+        ]
 
 
 def stack_components(config: LaunchConfig) -> tuple[Component, ...]:
@@ -149,9 +156,19 @@ def stack_components(config: LaunchConfig) -> tuple[Component, ...]:
     if config.nav_config is not None:
         nav_args += ["--config", str(config.nav_config)]
     return (
-        Component("bridge", "bridge", "bridge",
-                  ("--host", config.host, "--port", str(config.port),
-                   *config.bridge_access_args(), *config.bridge_args)),
+        Component(
+            "bridge",
+            "bridge",
+            "bridge",
+            (
+                "--host",
+                config.host,
+                "--port",
+                str(config.port),
+                *config.bridge_access_args(),
+                *config.bridge_args,
+            ),
+        ),
         Component("sim", "simulator", "simulator", tuple(sim_args), SIMULATOR_TOPICS),
         Component("nav", "navigation", "navigation", tuple(nav_args), NAVIGATION_TOPICS),
     )
@@ -178,8 +195,9 @@ def access_environment(config: LaunchConfig) -> dict[str, str]:
 
 def client_transport(config: LaunchConfig) -> TransportConfig:
     """The supervisor's own connections (readiness probe, restart counts) to the bridge."""
-    secret = (None if config.auth_secret_file is None
-              else SecretStr(read_secret(config.auth_secret_file)))
+    secret = (
+        None if config.auth_secret_file is None else SecretStr(read_secret(config.auth_secret_file))
+    )
     return TransportConfig(auth_secret=secret, cafile=config.certfile)
 
 
@@ -293,8 +311,9 @@ class Child:
     component: Component
     process: asyncio.subprocess.Process
     output: PrefixedOutput
-    port: asyncio.Future[int] = field(default_factory=lambda: asyncio.get_running_loop()
-                                      .create_future())
+    port: asyncio.Future[int] = field(
+        default_factory=lambda: asyncio.get_running_loop().create_future()
+    )
     started_s: float = field(default_factory=time.monotonic)
     # Serving (the bridge answers /version; a client's topics have publishers): from then on
     # the child handles SIGINT itself, so dying of it is a failure, not a stop while starting.
@@ -302,12 +321,19 @@ class Child:
     _pump: asyncio.Task[None] | None = None
 
     @classmethod
-    async def start(cls, component: Component, bridge_url: str, env: Mapping[str, str],
-                    output: PrefixedOutput) -> Child:
+    async def start(
+        cls, component: Component, bridge_url: str, env: Mapping[str, str], output: PrefixedOutput
+    ) -> Child:
         process = await asyncio.create_subprocess_exec(
-            *component.argv(bridge_url), stdin=asyncio.subprocess.DEVNULL,
-            stdout=asyncio.subprocess.PIPE, stderr=asyncio.subprocess.STDOUT, env=dict(env),
-            process_group=0, preexec_fn=_parent_death_signal(), limit=_LINE_LIMIT)
+            *component.argv(bridge_url),
+            stdin=asyncio.subprocess.DEVNULL,
+            stdout=asyncio.subprocess.PIPE,
+            stderr=asyncio.subprocess.STDOUT,
+            env=dict(env),
+            process_group=0,
+            preexec_fn=_parent_death_signal(),
+            limit=_LINE_LIMIT,
+        )
         child = cls(component, process, output)
         child._pump = asyncio.create_task(child._pump_lines(), name=f"{component.name} log")
         log.info("started %s (pid %d)", component.title, process.pid)
@@ -362,8 +388,9 @@ class Child:
             try:
                 return await asyncio.wait_for(asyncio.shield(self.wait()), timeout_s)
             except TimeoutError:
-                log.warning("%s did not exit within %.0f s of %s", self.component.title,
-                            timeout_s, sig.name)
+                log.warning(
+                    "%s did not exit within %.0f s of %s", self.component.title, timeout_s, sig.name
+                )
         return await self.wait()
 
 
@@ -376,9 +403,14 @@ class Supervisor:
     on_ready : called once with the bridge URL when every component is ready.
     """
 
-    def __init__(self, components: Sequence[Component], config: LaunchConfig,
-                 output: PrefixedOutput, env: Mapping[str, str] | None = None,
-                 on_ready: Callable[[str], None] | None = None) -> None:
+    def __init__(
+        self,
+        components: Sequence[Component],
+        config: LaunchConfig,
+        output: PrefixedOutput,
+        env: Mapping[str, str] | None = None,
+        on_ready: Callable[[str], None] | None = None,
+    ) -> None:
         self._bridge, *self._clients = components
         self._config = config
         self._output = output
@@ -418,16 +450,18 @@ class Supervisor:
             codes = await self._stop_all()
         unclean = {title: code for title, code in codes.items() if code != 0}
         if status == 0 and unclean:
-            log.error("unclean shutdown: %s",
-                      ", ".join(describe_exit(t, c) for t, c in unclean.items()))
+            log.error(
+                "unclean shutdown: %s", ", ".join(describe_exit(t, c) for t, c in unclean.items())
+            )
             status = 1
         return status
 
     async def _start(self, stop: asyncio.Event) -> None:
         deadline = asyncio.get_running_loop().time() + self._config.startup_timeout_s
         bridge = await self._spawn(self._bridge)
-        port = await self._guard(asyncio.shield(bridge.port), stop, deadline,
-                                 waiting_for=self._bridge.title)
+        port = await self._guard(
+            asyncio.shield(bridge.port), stop, deadline, waiting_for=self._bridge.title
+        )
         self._bridge_port = port
         self.url = ws_url(connect_host(self._config.host), port, self._config.scheme)
         await self._guard(self._probe_version(), stop, deadline, waiting_for=self._bridge.title)
@@ -435,8 +469,12 @@ class Supervisor:
         log.info("%s ready at %s", self._bridge.title, self.url)
         for component in self._clients:
             await self._spawn(component)
-        await self._guard(self._probe_clients(self._clients), stop, deadline,
-                          waiting_for=", ".join(c.title for c in self._clients))
+        await self._guard(
+            self._probe_clients(self._clients),
+            stop,
+            deadline,
+            waiting_for=", ".join(c.title for c in self._clients),
+        )
         for child in self.children:
             child.ready = True
 
@@ -473,10 +511,10 @@ class Supervisor:
         count = self.ledger.died(title, describe_exit(title, code).removeprefix(title + " "))
         backoff = self._backoffs.setdefault(title, RestartBackoff())
         delay_s = backoff.next_delay(time.monotonic() - child.started_s)
-        log.warning("%s; restarting it in %g s (restart %d)", describe_exit(title, code),
-                    delay_s, count)
-        task = asyncio.create_task(self._restart(child.component, delay_s),
-                                   name=f"restart {title}")
+        log.warning(
+            "%s; restarting it in %g s (restart %d)", describe_exit(title, code), delay_s, count
+        )
+        task = asyncio.create_task(self._restart(child.component, delay_s), name=f"restart {title}")
         self._restarting.add(task)
         task.add_done_callback(self._restarting.discard)
 
@@ -512,7 +550,6 @@ class Supervisor:
                 return
             await asyncio.sleep(_POLL_S)
 
-
     async def _probe_version(self) -> None:
         while True:
             with contextlib.suppress(Unhealthy):
@@ -524,8 +561,13 @@ class Supervisor:
         """Poll ``/rosapi/publishers`` until every topic of `components` has a publisher."""
         pending = {c.title: c.topics for c in components}
         self._missing = dict(pending)
-        async with RosbridgeClient(self.url, encoding="json", name="up-probe", reconnect=False,
-                                   transport=client_transport(self._config)) as probe:
+        async with RosbridgeClient(
+            self.url,
+            encoding="json",
+            name="up-probe",
+            reconnect=False,
+            transport=client_transport(self._config),
+        ) as probe:
             while pending:
                 for title, topics in list(pending.items()):
                     with contextlib.suppress(RosbridgeError, TimeoutError):
@@ -536,8 +578,15 @@ class Supervisor:
                 if pending:
                     await asyncio.sleep(_POLL_S)
 
-    async def _guard(self, work: Awaitable[T], stop: asyncio.Event, deadline: float | None = None,
-                     *, timeout_s: float | None = None, waiting_for: str = "") -> T:
+    async def _guard(
+        self,
+        work: Awaitable[T],
+        stop: asyncio.Event,
+        deadline: float | None = None,
+        *,
+        timeout_s: float | None = None,
+        waiting_for: str = "",
+    ) -> T:
         """Await ``work`` unless a child exits (ComponentDied), ``stop`` is set
         (StopRequested) or ``deadline`` passes (StartupTimeout) first."""
         loop = asyncio.get_running_loop()
@@ -547,8 +596,9 @@ class Supervisor:
         stopping = asyncio.ensure_future(stop.wait())
         exits = {asyncio.ensure_future(child.wait()): child for child in self.children}
         try:
-            done, _ = await asyncio.wait({task, stopping, *exits}, timeout=timeout_s,
-                                         return_when=asyncio.FIRST_COMPLETED)
+            done, _ = await asyncio.wait(
+                {task, stopping, *exits}, timeout=timeout_s, return_when=asyncio.FIRST_COMPLETED
+            )
             for exited, child in exits.items():
                 if exited in done:
                     raise ComponentDied(child.component.title, exited.result(), child)
@@ -563,10 +613,14 @@ class Supervisor:
             await asyncio.gather(task, stopping, *exits, return_exceptions=True)
 
     def _timeout_message(self, waiting_for: str) -> str:
-        details = "; ".join(f"{title} has no publisher on {', '.join(topics)}"
-                            for title, topics in self._missing.items() if topics)
-        return (f"{waiting_for} not ready within {self._config.startup_timeout_s:.0f} s"
-                + (f" ({details})" if details else ""))
+        details = "; ".join(
+            f"{title} has no publisher on {', '.join(topics)}"
+            for title, topics in self._missing.items()
+            if topics
+        )
+        return f"{waiting_for} not ready within {self._config.startup_timeout_s:.0f} s" + (
+            f" ({details})" if details else ""
+        )
 
     async def _stop_all(self) -> dict[str, int]:
         """Stop the clients (together), then the bridge; exit code by component title."""

@@ -24,15 +24,24 @@ def add_node_arguments(parser: argparse.ArgumentParser, config_tables: str) -> N
     parser.add_argument("--bridge", default="ws://127.0.0.1:9090", help="rosbridge URL")
     parser.add_argument("--config", help=f"TOML file with {config_tables} tables")
     parser.add_argument("--encoding", choices=("cbor", "json"), default="cbor")
-    parser.add_argument("--duration", type=float, default=0.0,
-                        help="stop after this many seconds (0: run until SIGINT/SIGTERM)")
-    parser.add_argument("--connect-timeout", type=float, default=10.0,
-                        help="seconds to keep retrying the first connection")
+    parser.add_argument(
+        "--duration",
+        type=float,
+        default=0.0,
+        help="stop after this many seconds (0: run until SIGINT/SIGTERM)",
+    )
+    parser.add_argument(
+        "--connect-timeout",
+        type=float,
+        default=10.0,
+        help="seconds to keep retrying the first connection",
+    )
     parser.add_argument("--log-level", default="INFO")
 
 
-async def run_until_stopped(serve: Callable[[asyncio.Event], Awaitable[None]],
-                            duration_s: float = 0.0) -> None:
+async def run_until_stopped(
+    serve: Callable[[asyncio.Event], Awaitable[None]], duration_s: float = 0.0
+) -> None:
     """Run `serve(stop)` until SIGINT, SIGTERM or `duration_s` (> 0) sets `stop`."""
     stop = asyncio.Event()
     loop = asyncio.get_running_loop()
@@ -52,16 +61,21 @@ async def run_until_stopped(serve: Callable[[asyncio.Event], Awaitable[None]],
             loop.remove_signal_handler(sig)
 
 
-def run_node(args: argparse.Namespace, log: logging.Logger,
-             load_config: Callable[[str], Config], default: Callable[[], Config],
-             serve: Callable[[Config, asyncio.Event], Awaitable[None]]) -> int:
+def run_node(
+    args: argparse.Namespace,
+    log: logging.Logger,
+    load_config: Callable[[str], Config],
+    default: Callable[[], Config],
+    serve: Callable[[Config, asyncio.Event], Awaitable[None]],
+) -> int:
     """Configure logging, load `args.config` (else `default()`), run `serve(config, stop)`.
 
     Returns the exit code: 0 on a clean stop, 2 when the config cannot be used (the message
     names the file and the field), 1 when the bridge cannot be reached.
     """
-    logging.basicConfig(level=args.log_level.upper(),
-                        format="%(asctime)s %(levelname)s %(name)s: %(message)s")
+    logging.basicConfig(
+        level=args.log_level.upper(), format="%(asctime)s %(levelname)s %(name)s: %(message)s"
+    )
     try:
         config = load_config(args.config) if args.config else default()
     except (OSError, ValueError) as exc:  # pydantic's ValidationError is a ValueError

@@ -35,8 +35,9 @@ class NodeLinks:
 
 
 @contextlib.asynccontextmanager
-async def node_links(url: str, process: str, *, encoding: Encoding = "cbor",
-                     connect_timeout_s: float = 10.0) -> AsyncIterator[NodeLinks]:
+async def node_links(
+    url: str, process: str, *, encoding: Encoding = "cbor", connect_timeout_s: float = 10.0
+) -> AsyncIterator[NodeLinks]:
     """Connect `process` to the bridge at `url` twice and publish its telemetry meanwhile.
 
     Applies the process settings every riverbridge process runs with (`tune_process`) and,
@@ -45,10 +46,18 @@ async def node_links(url: str, process: str, *, encoding: Encoding = "cbor",
     """
     tune_process()
     tracer = Tracer(process)
-    async with (RosbridgeClient(url, encoding=encoding, name=process,
-                                connect_timeout=connect_timeout_s, tracer=tracer) as bulk,
-                RosbridgeClient(url, encoding=encoding, name=f"{process}-realtime",
-                                connect_timeout=connect_timeout_s, tracer=tracer) as realtime):
+    async with (
+        RosbridgeClient(
+            url, encoding=encoding, name=process, connect_timeout=connect_timeout_s, tracer=tracer
+        ) as bulk,
+        RosbridgeClient(
+            url,
+            encoding=encoding,
+            name=f"{process}-realtime",
+            connect_timeout=connect_timeout_s,
+            tracer=tracer,
+        ) as realtime,
+    ):
         freeze_startup_heap()
         async with telemetry(bulk, tracer, also=[realtime]):
             yield NodeLinks(bulk, realtime, tracer)

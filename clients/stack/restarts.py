@@ -80,8 +80,7 @@ class RestartLedger:
 
     async def attach(self, url: str, transport: TransportConfig | None = None) -> None:
         """Connect a client of the ledger's own and publish the counts (latched)."""
-        client = RosbridgeClient(url, encoding="json", name="up-supervisor",
-                                 transport=transport)
+        client = RosbridgeClient(url, encoding="json", name="up-supervisor", transport=transport)
         await client.connect()
         await client.advertise(RESTARTS_TOPIC, RESTARTS_TYPE, latch=True)
         self._client = client
@@ -92,8 +91,9 @@ class RestartLedger:
         if self._client is None:
             return
         try:
-            await self._client.publish(RESTARTS_TOPIC,
-                                       restarts_msg(self.components, time.time_ns()))
+            await self._client.publish(
+                RESTARTS_TOPIC, restarts_msg(self.components, time.time_ns())
+            )
         except RosbridgeError as exc:
             log.warning("cannot publish the restart counts: %s", exc)
 

@@ -81,18 +81,36 @@ def _positive_int(text: str) -> int:
 
 def add_access_arguments(parser: argparse.ArgumentParser) -> None:
     """The bridge's access options, passed through (docs/bridge.md)."""
-    parser.add_argument("--auth-secret-file", type=_existing_file, metavar="FILE",
-                        help="the bridge requires rosauth's auth op with this secret; the "
-                        "simulator and navigation authenticate with it")
-    parser.add_argument("--certfile", type=_existing_file, metavar="FILE",
-                        help="serve wss:// and https:// with this certificate (it must name "
-                        "the host the components connect to, e.g. 127.0.0.1)")
-    parser.add_argument("--keyfile", type=_existing_file, metavar="FILE",
-                        help="private key of --certfile")
-    parser.add_argument("--allowed-origins", nargs="+", default=[], metavar="GLOB",
-                        help="browser Origins allowed to connect (others get 403)")
-    parser.add_argument("--max-clients", type=_positive_int, metavar="N",
-                        help="refuse websocket handshakes while N clients are connected")
+    parser.add_argument(
+        "--auth-secret-file",
+        type=_existing_file,
+        metavar="FILE",
+        help="the bridge requires rosauth's auth op with this secret; the "
+        "simulator and navigation authenticate with it",
+    )
+    parser.add_argument(
+        "--certfile",
+        type=_existing_file,
+        metavar="FILE",
+        help="serve wss:// and https:// with this certificate (it must name "
+        "the host the components connect to, e.g. 127.0.0.1)",
+    )
+    parser.add_argument(
+        "--keyfile", type=_existing_file, metavar="FILE", help="private key of --certfile"
+    )
+    parser.add_argument(
+        "--allowed-origins",
+        nargs="+",
+        default=[],
+        metavar="GLOB",
+        help="browser Origins allowed to connect (others get 403)",
+    )
+    parser.add_argument(
+        "--max-clients",
+        type=_positive_int,
+        metavar="N",
+        help="refuse websocket handshakes while N clients are connected",
+    )
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -100,29 +118,56 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="riverbridge up",
         description="Run the bridge, the simulator and the navigation service as three local "
-        "processes with merged, prefixed logs, until Ctrl-C/SIGTERM or until one of them dies.")
-    parser.add_argument("--host", default=defaults.host,
-                        help="address the bridge listens on (default %(default)s)")
-    parser.add_argument("--port", type=_port, default=defaults.port,
-                        help="the bridge's TCP port; 0 picks a free one (default %(default)s)")
-    parser.add_argument("--encoding", choices=("json", "cbor"), default=defaults.encoding,
-                        help="wire encoding of the simulator and navigation (default %(default)s)")
-    parser.add_argument("--sim-config", type=_toml_file, metavar="FILE",
-                        help="simulator TOML configuration")
-    parser.add_argument("--nav-config", type=_toml_file, metavar="FILE",
-                        help="navigation TOML configuration")
-    parser.add_argument("--startup-timeout", type=positive_seconds,
-                        default=defaults.startup_timeout_s,
-                        metavar="S", help="seconds for all three to become ready "
-                        "(default %(default)s)")
-    parser.add_argument("--record", type=output_file, metavar="FILE.mcap",
-                        help="also record every topic into this MCAP file (riverbridge record)")
-    parser.add_argument("--stop-timeout", type=positive_seconds, default=defaults.stop_timeout_s,
-                        metavar="S", help="seconds per shutdown step (SIGINT, SIGTERM, SIGKILL; "
-                        "default %(default)s)")
-    parser.add_argument("--restart", choices=RESTART_MODES, default=defaults.restart,
-                        help="restart a component that dies: on-failure (non-zero exit or a "
-                        "signal), always, or never (then up stops; default %(default)s)")
+        "processes with merged, prefixed logs, until Ctrl-C/SIGTERM or until one of them dies.",
+    )
+    parser.add_argument(
+        "--host", default=defaults.host, help="address the bridge listens on (default %(default)s)"
+    )
+    parser.add_argument(
+        "--port",
+        type=_port,
+        default=defaults.port,
+        help="the bridge's TCP port; 0 picks a free one (default %(default)s)",
+    )
+    parser.add_argument(
+        "--encoding",
+        choices=("json", "cbor"),
+        default=defaults.encoding,
+        help="wire encoding of the simulator and navigation (default %(default)s)",
+    )
+    parser.add_argument(
+        "--sim-config", type=_toml_file, metavar="FILE", help="simulator TOML configuration"
+    )
+    parser.add_argument(
+        "--nav-config", type=_toml_file, metavar="FILE", help="navigation TOML configuration"
+    )
+    parser.add_argument(
+        "--startup-timeout",
+        type=positive_seconds,
+        default=defaults.startup_timeout_s,
+        metavar="S",
+        help="seconds for all three to become ready (default %(default)s)",
+    )
+    parser.add_argument(
+        "--record",
+        type=output_file,
+        metavar="FILE.mcap",
+        help="also record every topic into this MCAP file (riverbridge record)",
+    )
+    parser.add_argument(
+        "--stop-timeout",
+        type=positive_seconds,
+        default=defaults.stop_timeout_s,
+        metavar="S",
+        help="seconds per shutdown step (SIGINT, SIGTERM, SIGKILL; default %(default)s)",
+    )
+    parser.add_argument(
+        "--restart",
+        choices=RESTART_MODES,
+        default=defaults.restart,
+        help="restart a component that dies: on-failure (non-zero exit or a "
+        "signal), always, or never (then up stops; default %(default)s)",
+    )
     add_access_arguments(parser)
     add_dds_options(parser)
     return parser
@@ -137,14 +182,27 @@ def _domain(text: str) -> str:
 def add_dds_options(parser: argparse.ArgumentParser) -> None:
     """The bridge's DDS options, passed through to it (docs/ros2.md)."""
     group = parser.add_argument_group("ROS 2 over DDS (passed to the bridge; docs/ros2.md)")
-    group.add_argument("--dds", action="store_true",
-                       help="the bridge joins a ROS 2 DDS domain with Cyclone DDS")
-    group.add_argument("--domain", type=_domain, metavar="N",
-                       help="DDS domain id (bridge default: $ROS_DOMAIN_ID or 0)")
-    group.add_argument("--dds-interface", metavar="NAME",
-                       help="the only network interface DDS may use (bridge default: lo)")
-    group.add_argument("--dds-peer", action="append", default=[], metavar="ADDR",
-                       help="unicast discovery peer (repeatable)")
+    group.add_argument(
+        "--dds", action="store_true", help="the bridge joins a ROS 2 DDS domain with Cyclone DDS"
+    )
+    group.add_argument(
+        "--domain",
+        type=_domain,
+        metavar="N",
+        help="DDS domain id (bridge default: $ROS_DOMAIN_ID or 0)",
+    )
+    group.add_argument(
+        "--dds-interface",
+        metavar="NAME",
+        help="the only network interface DDS may use (bridge default: lo)",
+    )
+    group.add_argument(
+        "--dds-peer",
+        action="append",
+        default=[],
+        metavar="ADDR",
+        help="unicast discovery peer (repeatable)",
+    )
 
 
 def dds_bridge_args(args: argparse.Namespace) -> tuple[str, ...]:
@@ -159,18 +217,27 @@ def dds_bridge_args(args: argparse.Namespace) -> tuple[str, ...]:
 
 
 def config_from_args(args: argparse.Namespace) -> LaunchConfig:
-    return LaunchConfig(host=args.host, port=args.port, encoding=args.encoding,
-                        sim_config=args.sim_config, nav_config=args.nav_config,
-                        startup_timeout_s=args.startup_timeout, stop_timeout_s=args.stop_timeout,
-                        restart=args.restart, auth_secret_file=args.auth_secret_file,
-                        certfile=args.certfile, keyfile=args.keyfile,
-                        allowed_origins=tuple(args.allowed_origins),
-                        max_clients=args.max_clients,
-                        bridge_args=dds_bridge_args(args))
+    return LaunchConfig(
+        host=args.host,
+        port=args.port,
+        encoding=args.encoding,
+        sim_config=args.sim_config,
+        nav_config=args.nav_config,
+        startup_timeout_s=args.startup_timeout,
+        stop_timeout_s=args.stop_timeout,
+        restart=args.restart,
+        auth_secret_file=args.auth_secret_file,
+        certfile=args.certfile,
+        keyfile=args.keyfile,
+        allowed_origins=tuple(args.allowed_origins),
+        max_clients=args.max_clients,
+        bridge_args=dds_bridge_args(args),
+    )
 
 
-async def _supervise(config: LaunchConfig, output: PrefixedOutput,
-                     extra: tuple[Component, ...] = ()) -> int:
+async def _supervise(
+    config: LaunchConfig, output: PrefixedOutput, extra: tuple[Component, ...] = ()
+) -> int:
     stop = asyncio.Event()
     loop = asyncio.get_running_loop()
     for sig in STOP_SIGNALS:
@@ -180,8 +247,7 @@ async def _supervise(config: LaunchConfig, output: PrefixedOutput,
         output.write("up", f"all three ready; connect to {url} (Ctrl-C stops)")
 
     try:
-        supervisor = Supervisor(stack_components(config) + extra, config, output,
-                                on_ready=announce)
+        supervisor = Supervisor(stack_components(config) + extra, config, output, on_ready=announce)
         return await supervisor.run(stop)
     finally:
         for sig in STOP_SIGNALS:

@@ -34,6 +34,7 @@ class ResourceSampler:
                 return int(statm.read().split()[1]) * self._page_bytes
         except (OSError, IndexError, ValueError):
             import resource  # not Linux: peak RSS is the best available (kB on Linux/BSD)
+
             return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
 
     def cpu_percent(self) -> float:
@@ -45,8 +46,9 @@ class ResourceSampler:
         return 100.0 * share
 
 
-async def telemetry_ticks(period_s: float = PUBLISH_PERIOD_S,
-                          trace_period_s: float = TRACE_PERIOD_S) -> AsyncIterator[bool]:
+async def telemetry_ticks(
+    period_s: float = PUBLISH_PERIOD_S, trace_period_s: float = TRACE_PERIOD_S
+) -> AsyncIterator[bool]:
     """Wake every `trace_period_s` (span batches) and say whether stats are due as well (every
     `period_s`); runs until cancelled. The bridge and the client processes share the rhythm."""
     step_s = min(trace_period_s, period_s)

@@ -86,8 +86,10 @@ class CoreHarness:
 
     def outbox(self, client: int) -> list[Any]:
         """Decoded messages sent to `client` since the last call."""
-        return [codec_json.loads(f.data) if f.text else codec_cbor.loads(f.data)
-                for f in self.frames(client)]
+        return [
+            codec_json.loads(f.data) if f.text else codec_cbor.loads(f.data)
+            for f in self.frames(client)
+        ]
 
     def call(self, client: int, service: str, args: Any = None, **extra: Any) -> dict[str, Any]:
         """Call a service and return the single response the caller got."""

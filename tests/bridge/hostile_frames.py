@@ -29,25 +29,70 @@ HUGE_FLOAT = Raw("1e400")  # parses to inf with the standard library
 NAN = Raw("NaN")
 
 NAMES = [
-    "/fuzz/a", "fuzz/b", "/fuzz/c", "/fuzz/" + SURROGATE, "/fuzz/a\x00b", "/fuzz//x",
-    "/fuzz/x/", "/fuzz/1x", "~/fuzz", "/fuzz/{ns}", "/fuzz/../etc", "/fuzz/ü", "",
-    "/", "/fuzz/" + "n" * 300, "rosapi/topics", "/rosapi/get_param_names",
+    "/fuzz/a",
+    "fuzz/b",
+    "/fuzz/c",
+    "/fuzz/" + SURROGATE,
+    "/fuzz/a\x00b",
+    "/fuzz//x",
+    "/fuzz/x/",
+    "/fuzz/1x",
+    "~/fuzz",
+    "/fuzz/{ns}",
+    "/fuzz/../etc",
+    "/fuzz/ü",
+    "",
+    "/",
+    "/fuzz/" + "n" * 300,
+    "rosapi/topics",
+    "/rosapi/get_param_names",
 ]
-TYPES = ["std_msgs/String", "std_msgs/msg/Int64", "sensor_msgs/msg/Imu", "std_srvs/SetBool",
-         "std_srvs/srv/Trigger", "example_interfaces/Fibonacci", "x", "", "a/b/c/d",
-         "std_msgs/" + SURROGATE]
+TYPES = [
+    "std_msgs/String",
+    "std_msgs/msg/Int64",
+    "sensor_msgs/msg/Imu",
+    "std_srvs/SetBool",
+    "std_srvs/srv/Trigger",
+    "example_interfaces/Fibonacci",
+    "x",
+    "",
+    "a/b/c/d",
+    "std_msgs/" + SURROGATE,
+]
 
 
 def hostile_values(rng: random.Random) -> list[Any]:
     """Values that decode in JSON but break naive code later."""
     depth = rng.choice([50, 300, 2000])
     return [
-        SURROGATE, "ok" + SURROGATE + "ok", "\udfff", BIG_DIGITS, 2**64, -(2**63) - 1, 2**100,
-        10**30, HUGE_FLOAT, Raw("-1e400"), NAN, Raw("Infinity"), 1.5, -1, 0, True, None, "",
-        "x" * rng.choice([300, 5000, 70_000]), [1] * rng.choice([3, 1000]),
-        Raw("[" * depth + "]" * depth), Raw('{"a":' * depth + "1" + "}" * depth),
-        {"data": SURROGATE}, {"data": BIG_DIGITS}, {"data": HUGE_FLOAT}, [SURROGATE],
-        {"nested": {"deep": [1, {"x": SURROGATE}]}}, {"sec": 2**40, "nanosec": -1},
+        SURROGATE,
+        "ok" + SURROGATE + "ok",
+        "\udfff",
+        BIG_DIGITS,
+        2**64,
+        -(2**63) - 1,
+        2**100,
+        10**30,
+        HUGE_FLOAT,
+        Raw("-1e400"),
+        NAN,
+        Raw("Infinity"),
+        1.5,
+        -1,
+        0,
+        True,
+        None,
+        "",
+        "x" * rng.choice([300, 5000, 70_000]),
+        [1] * rng.choice([3, 1000]),
+        Raw("[" * depth + "]" * depth),
+        Raw('{"a":' * depth + "1" + "}" * depth),
+        {"data": SURROGATE},
+        {"data": BIG_DIGITS},
+        {"data": HUGE_FLOAT},
+        [SURROGATE],
+        {"nested": {"deep": [1, {"x": SURROGATE}]}},
+        {"sec": 2**40, "nanosec": -1},
     ]
 
 
@@ -58,12 +103,29 @@ def cbor_values(rng: random.Random) -> list[Any]:
     for _ in range(depth):
         nested = [nested]
     return [
-        cbor2.undefined, {1, 2, 3}, frozenset({"a"}), {1: 2}, {(1, 2): "x"}, {b"k": 1},
-        cbor2.CBORTag(999, "x"), cbor2.CBORTag(0, "2020-01-01T00:00:00Z"),
-        cbor2.CBORTag(1, 1e300), cbor2.CBORTag(32, "http://x"), cbor2.CBORTag(86, b"abc"),
-        cbor2.CBORTag(85, b"\x00" * 3), cbor2.CBORSimpleValue(99), 10**400, -(10**5000),
-        2**64, b"\xff\xfe", float("inf"), float("nan"), nested, {"data": cbor2.undefined},
-        {"data": {1, 2}}, {"data": 10**400},
+        cbor2.undefined,
+        {1, 2, 3},
+        frozenset({"a"}),
+        {1: 2},
+        {(1, 2): "x"},
+        {b"k": 1},
+        cbor2.CBORTag(999, "x"),
+        cbor2.CBORTag(0, "2020-01-01T00:00:00Z"),
+        cbor2.CBORTag(1, 1e300),
+        cbor2.CBORTag(32, "http://x"),
+        cbor2.CBORTag(86, b"abc"),
+        cbor2.CBORTag(85, b"\x00" * 3),
+        cbor2.CBORSimpleValue(99),
+        10**400,
+        -(10**5000),
+        2**64,
+        b"\xff\xfe",
+        float("inf"),
+        float("nan"),
+        nested,
+        {"data": cbor2.undefined},
+        {"data": {1, 2}},
+        {"data": 10**400},
     ]
 
 
@@ -72,39 +134,98 @@ TEMPLATES: list[dict[str, Any]] = [
     {"op": "unadvertise", "topic": "/fuzz/a", "id": "ad"},
     {"op": "publish", "topic": "/fuzz/a", "msg": {"data": "x"}},
     {"op": "publish", "topic": "/fuzz/i", "type": "std_msgs/msg/Int64", "msg": {"data": 1}},
-    {"op": "publish", "topic": "/fuzz/imu", "type": "sensor_msgs/msg/Imu",
-     "msg": {"header": {"frame_id": "f"}, "orientation_covariance": [0.0] * 9}},
-    {"op": "subscribe", "topic": "/fuzz/a", "type": "std_msgs/String", "id": "s",
-     "throttle_rate": 0, "queue_length": 1, "compression": "cbor"},
+    {
+        "op": "publish",
+        "topic": "/fuzz/imu",
+        "type": "sensor_msgs/msg/Imu",
+        "msg": {"header": {"frame_id": "f"}, "orientation_covariance": [0.0] * 9},
+    },
+    {
+        "op": "subscribe",
+        "topic": "/fuzz/a",
+        "type": "std_msgs/String",
+        "id": "s",
+        "throttle_rate": 0,
+        "queue_length": 1,
+        "compression": "cbor",
+    },
     {"op": "unsubscribe", "topic": "/fuzz/a", "id": "s"},
     {"op": "call_service", "service": "/rosapi/topics", "id": 1, "args": {}},
-    {"op": "call_service", "service": "/rosapi/set_param", "id": 2,
-     "args": {"name": "/fuzz:p", "value": "1"}},
+    {
+        "op": "call_service",
+        "service": "/rosapi/set_param",
+        "id": 2,
+        "args": {"name": "/fuzz:p", "value": "1"},
+    },
     {"op": "call_service", "service": "/rosapi/get_param_names", "id": 3},
-    {"op": "call_service", "service": "/fuzz/svc", "id": 4, "args": {"data": True},
-     "timeout": 0.2},
+    {"op": "call_service", "service": "/fuzz/svc", "id": 4, "args": {"data": True}, "timeout": 0.2},
     {"op": "advertise_service", "service": "/fuzz/svc", "type": "std_srvs/SetBool"},
     {"op": "unadvertise_service", "service": "/fuzz/svc"},
-    {"op": "service_response", "service": "/fuzz/svc", "id": "service_request:/fuzz/svc:1",
-     "values": {"success": True, "message": "m"}, "result": True},
+    {
+        "op": "service_response",
+        "service": "/fuzz/svc",
+        "id": "service_request:/fuzz/svc:1",
+        "values": {"success": True, "message": "m"},
+        "result": True,
+    },
     {"op": "advertise_action", "action": "/fuzz/act", "type": "example_interfaces/Fibonacci"},
     {"op": "unadvertise_action", "action": "/fuzz/act"},
-    {"op": "send_action_goal", "action": "/fuzz/act", "action_type":
-     "example_interfaces/Fibonacci", "args": {"order": 3}, "id": "g", "feedback": True},
-    {"op": "action_result", "action": "/fuzz/act", "id": "action_goal:/fuzz/act:1",
-     "values": {"sequence": [0, 1]}, "status": 4, "result": True},
+    {
+        "op": "send_action_goal",
+        "action": "/fuzz/act",
+        "action_type": "example_interfaces/Fibonacci",
+        "args": {"order": 3},
+        "id": "g",
+        "feedback": True,
+    },
+    {
+        "op": "action_result",
+        "action": "/fuzz/act",
+        "id": "action_goal:/fuzz/act:1",
+        "values": {"sequence": [0, 1]},
+        "status": 4,
+        "result": True,
+    },
     {"op": "cancel_action_goal", "action": "/fuzz/act", "id": "g"},
     {"op": "fragment", "id": "f", "num": 0, "total": 2, "data": '{"op":"set_'},
     {"op": "set_level", "level": "error"},
-    {"op": "auth", "mac": "00", "client": "c", "dest": "d", "rand": "r", "t": 0,
-     "level": "admin", "end": 0},
+    {
+        "op": "auth",
+        "mac": "00",
+        "client": "c",
+        "dest": "d",
+        "rand": "r",
+        "t": 0,
+        "level": "admin",
+        "end": 0,
+    },
     {"op": "png", "data": "iVBORw0KGgo=", "id": "p"},
 ]
 
 # Keys worth replacing: each op's own, plus the ones every op may carry.
-EXTRA_KEYS = ["id", "op", "fragment_size", "compression", "msg", "args", "values", "type",
-              "topic", "service", "action", "throttle_rate", "queue_length", "timeout",
-              "latch", "status", "result", "level", "total", "num", "data"]
+EXTRA_KEYS = [
+    "id",
+    "op",
+    "fragment_size",
+    "compression",
+    "msg",
+    "args",
+    "values",
+    "type",
+    "topic",
+    "service",
+    "action",
+    "throttle_rate",
+    "queue_length",
+    "timeout",
+    "latch",
+    "status",
+    "result",
+    "level",
+    "total",
+    "num",
+    "data",
+]
 
 
 def to_json(value: Any) -> str:
@@ -161,8 +282,9 @@ class HostileFrames:
         return to_json(self._op(hostile_values(self.rng)))
 
     def _cbor(self) -> bytes:
-        values = cbor_values(self.rng) + [v for v in hostile_values(self.rng)
-                                          if not isinstance(v, str)]
+        values = cbor_values(self.rng) + [
+            v for v in hostile_values(self.rng) if not isinstance(v, str)
+        ]
         op = self._op(values)
         try:
             return cbor2.dumps(op)

@@ -20,8 +20,15 @@ pytestmark = pytest.mark.timeout(60)
 @pytest.mark.slow
 async def test_module_starts_logs_its_port_and_exits_cleanly_on_sigint():
     process = await asyncio.create_subprocess_exec(
-        sys.executable, "-m", "bridge", "--port", "0", "--log-level", "warning",
-        stderr=subprocess.PIPE)
+        sys.executable,
+        "-m",
+        "bridge",
+        "--port",
+        "0",
+        "--log-level",
+        "warning",
+        stderr=subprocess.PIPE,
+    )
     try:
         async with asyncio.timeout(30):
             while True:
@@ -31,8 +38,9 @@ async def test_module_starts_logs_its_port_and_exits_cleanly_on_sigint():
                 if match:
                     break
         async with websockets.connect(match.group(1)) as ws:
-            await ws.send(json.dumps({"op": "call_service", "id": 1,
-                                      "service": "/rosapi/get_ros_version"}))
+            await ws.send(
+                json.dumps({"op": "call_service", "id": 1, "service": "/rosapi/get_ros_version"})
+            )
             response = json.loads(await asyncio.wait_for(ws.recv(), 10))
             assert response["values"] == {"version": 2, "distro": "jazzy"}
         process.send_signal(signal.SIGINT)
@@ -43,13 +51,16 @@ async def test_module_starts_logs_its_port_and_exits_cleanly_on_sigint():
             await process.wait()
 
 
-@pytest.mark.parametrize("argv, option", [
-    (["--port", "70000"], "--port"),
-    (["--max-message-size", "0"], "--max-message-size"),
-    (["--call-timeout", "soon"], "--call-timeout"),
-    (["--interfaces", "/no/such/dir"], "--interfaces"),
-    (["--send-buffer", "1000"], "--send-buffer"),
-])
+@pytest.mark.parametrize(
+    "argv, option",
+    [
+        (["--port", "70000"], "--port"),
+        (["--max-message-size", "0"], "--max-message-size"),
+        (["--call-timeout", "soon"], "--call-timeout"),
+        (["--interfaces", "/no/such/dir"], "--interfaces"),
+        (["--send-buffer", "1000"], "--send-buffer"),
+    ],
+)
 def test_bad_arguments_name_the_option(argv, option, capsys):
     with pytest.raises(SystemExit) as exited:
         main(argv)
@@ -58,9 +69,20 @@ def test_bad_arguments_name_the_option(argv, option, capsys):
 
 
 def test_arguments_become_the_config():
-    args = build_parser().parse_args(["--port", "0", "--topics-glob", "/cam/*",
-                                      "--topics-glob", "/imu", "--send-buffer", "70000",
-                                      "--call-timeout", "1.5"])
+    args = build_parser().parse_args(
+        [
+            "--port",
+            "0",
+            "--topics-glob",
+            "/cam/*",
+            "--topics-glob",
+            "/imu",
+            "--send-buffer",
+            "70000",
+            "--call-timeout",
+            "1.5",
+        ]
+    )
     config = config_from_args(args)
     assert config.port == 0 and config.topics_glob == ("/cam/*", "/imu")
     assert config.send_buffer_bytes == 70_000 and config.call_timeout_s == 1.5

@@ -17,8 +17,7 @@ def secured(registry) -> CoreHarness:
 
 
 def signed(**changes) -> dict:
-    op = rosauth.auth_op(SECRET, NOW_S, client="192.168.1.101", dest="192.168.1.111",
-                         level="admin")
+    op = rosauth.auth_op(SECRET, NOW_S, client="192.168.1.101", dest="192.168.1.111", level="admin")
     return {**op, **changes}
 
 
@@ -38,14 +37,17 @@ def test_a_valid_auth_opens_the_bridge(secured):
     assert secured.closes == []
 
 
-@pytest.mark.parametrize(("changes", "why"), [
-    ({"mac": "0" * 128}, "mac does not match"),
-    ({"level": "user"}, "mac does not match"),  # any field changed breaks the MAC
-    ({"t": NOW_S - 6}, "from the bridge's clock"),
-    ({"t": NOW_S + 6}, "from the bridge's clock"),
-    ({"end": NOW_S - 1}, "not in the future"),
-    ({"t": "yesterday"}, "must be times"),
-])
+@pytest.mark.parametrize(
+    ("changes", "why"),
+    [
+        ({"mac": "0" * 128}, "mac does not match"),
+        ({"level": "user"}, "mac does not match"),  # any field changed breaks the MAC
+        ({"t": NOW_S - 6}, "from the bridge's clock"),
+        ({"t": NOW_S + 6}, "from the bridge's clock"),
+        ({"end": NOW_S - 1}, "not in the future"),
+        ({"t": "yesterday"}, "must be times"),
+    ],
+)
 def test_a_failed_auth_closes_the_connection(secured, caplog, changes, why):
     client = secured.connect()
     secured.send(client, signed(**changes))
@@ -60,8 +62,7 @@ def test_times_may_be_ros_time_objects(secured):
     op = signed()
     t, end = op["t"], op["end"]
     client = secured.connect()
-    secured.send(client, {**op, "t": {"secs": t, "nsecs": 5}, "end": {"sec": end,
-                                                                      "nanosec": 0}})
+    secured.send(client, {**op, "t": {"secs": t, "nsecs": 5}, "end": {"sec": end, "nanosec": 0}})
     assert secured.call(client, "/rosapi/get_time")["result"] is True
 
 

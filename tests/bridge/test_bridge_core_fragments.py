@@ -6,10 +6,12 @@ import json
 
 
 def pieces(text: str, size: int, frag_id: str = "f1", float_total: bool = False) -> list[dict]:
-    chunks = [text[i:i + size] for i in range(0, len(text), size)]
+    chunks = [text[i : i + size] for i in range(0, len(text), size)]
     total = (len(text) - 1) / size + 1 if float_total else len(chunks)
-    return [{"op": "fragment", "id": frag_id, "num": i, "total": total, "data": chunk}
-            for i, chunk in enumerate(chunks)]
+    return [
+        {"op": "fragment", "id": frag_id, "num": i, "total": total, "data": chunk}
+        for i, chunk in enumerate(chunks)
+    ]
 
 
 def test_out_of_order_fragments_with_float_total_form_any_op(harness):
@@ -20,9 +22,15 @@ def test_out_of_order_fragments_with_float_total_form_any_op(harness):
     for fragment in reversed(fragments):
         harness.send(caller, fragment)
     response = harness.outbox(caller)
-    assert response == [{"op": "service_response", "service": "/rosapi/get_ros_version",
-                         "values": {"version": 2, "distro": "jazzy"}, "result": True,
-                         "id": "v"}]
+    assert response == [
+        {
+            "op": "service_response",
+            "service": "/rosapi/get_ros_version",
+            "values": {"version": 2, "distro": "jazzy"},
+            "result": True,
+            "id": "v",
+        }
+    ]
     assert harness.state.sessions[caller].fragments == {}
 
 
@@ -56,8 +64,9 @@ def test_fragments_beyond_the_size_limit_close_the_client_with_1009(registry):
     harness = CoreHarness(registry, max_message_size=100)
     client, other = harness.connect(), harness.connect()
     for frag_id in ("a", "b"):
-        harness.send(client, {"op": "fragment", "id": frag_id, "num": 0, "total": 10,
-                              "data": "x" * 40})
+        harness.send(
+            client, {"op": "fragment", "id": frag_id, "num": 0, "total": 10, "data": "x" * 40}
+        )
     harness.send(other, {"op": "fragment", "id": "a", "num": 0, "total": 10, "data": "y" * 40})
     assert harness.closes == []
     harness.send(client, {"op": "fragment", "id": "c", "num": 0, "total": 10, "data": "x" * 40})

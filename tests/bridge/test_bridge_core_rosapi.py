@@ -11,10 +11,13 @@ def graph(harness):
     pub, sub, provider = harness.connect(), harness.connect(), harness.connect()
     harness.send(pub, {"op": "advertise", "topic": "/chatter", "type": "std_msgs/String"})
     harness.send(sub, {"op": "subscribe", "topic": "/chatter"})
-    harness.send(provider, {"op": "advertise_service", "service": "/set", "type":
-                            "std_srvs/SetBool"})
-    harness.send(provider, {"op": "advertise_action", "action": "/fib",
-                            "type": "example_interfaces/Fibonacci"})
+    harness.send(
+        provider, {"op": "advertise_service", "service": "/set", "type": "std_srvs/SetBool"}
+    )
+    harness.send(
+        provider,
+        {"op": "advertise_action", "action": "/fib", "type": "example_interfaces/Fibonacci"},
+    )
     return harness, harness.connect()
 
 
@@ -26,8 +29,9 @@ def values(h, client, service, args=None, **extra):
 
 def test_topics_and_raw_types_always_lists_rosout(harness):
     client = harness.connect()
-    result = values(harness, client, "/rosapi/topics_and_raw_types",
-                    type="rosapi/TopicsAndRawTypes")
+    result = values(
+        harness, client, "/rosapi/topics_and_raw_types", type="rosapi/TopicsAndRawTypes"
+    )
     index = result["topics"].index("/rosout")
     assert result["types"][index] == "rcl_interfaces/msg/Log"
     assert "string msg" in result["typedefs_full_text"][index]
@@ -37,16 +41,21 @@ def test_topic_queries(graph):
     h, client = graph
     assert values(h, client, "rosapi/topics") == {
         "topics": ["/chatter", "/rosout"],
-        "types": ["std_msgs/msg/String", "rcl_interfaces/msg/Log"]}
+        "types": ["std_msgs/msg/String", "rcl_interfaces/msg/Log"],
+    }
     assert values(h, client, "/rosapi/topic_type", {"topic": "/chatter"}) == {
-        "type": "std_msgs/msg/String"}
+        "type": "std_msgs/msg/String"
+    }
     assert values(h, client, "/rosapi/topic_type", {"topic": "/none"}) == {"type": ""}
     assert values(h, client, "/rosapi/topics_for_type", {"type": "std_msgs/String"}) == {
-        "topics": ["/chatter"]}
+        "topics": ["/chatter"]
+    }
     assert values(h, client, "/rosapi/publishers", {"topic": "/chatter"}) == {
-        "publishers": ["/rosbridge_client_1"]}
+        "publishers": ["/rosbridge_client_1"]
+    }
     assert values(h, client, "/rosapi/subscribers", {"topic": "/chatter"}) == {
-        "subscribers": ["/rosbridge_client_2"]}
+        "subscribers": ["/rosbridge_client_2"]
+    }
 
 
 def test_service_queries(graph):
@@ -54,15 +63,20 @@ def test_service_queries(graph):
     services = values(h, client, "/rosapi/services")["services"]
     assert "/set" in services and "/rosapi/services" in services
     assert values(h, client, "/rosapi/service_type", {"service": "/set"}) == {
-        "type": "std_srvs/srv/SetBool"}
+        "type": "std_srvs/srv/SetBool"
+    }
     assert values(h, client, "/rosapi/service_type", {"service": "/rosapi/topics"}) == {
-        "type": "rosapi_msgs/srv/Topics"}
+        "type": "rosapi_msgs/srv/Topics"
+    }
     assert values(h, client, "/rosapi/services_for_type", {"type": "std_srvs/SetBool"}) == {
-        "services": ["/set"]}
+        "services": ["/set"]
+    }
     assert values(h, client, "/rosapi/service_node", {"service": "/set"}) == {
-        "node": "/rosbridge_client_3"}
+        "node": "/rosbridge_client_3"
+    }
     assert values(h, client, "/rosapi/service_providers", {"service": "/set"}) == {
-        "providers": ["/rosbridge_client_3"]}
+        "providers": ["/rosbridge_client_3"]
+    }
 
 
 def test_node_queries(graph):
@@ -70,9 +84,15 @@ def test_node_queries(graph):
     nodes = values(h, client, "/rosapi/nodes")["nodes"]
     assert {"/rosbridge_websocket", "/rosapi", "/rosbridge_client_1"} <= set(nodes)
     assert values(h, client, "/rosapi/node_details", {"node": "/rosbridge_client_1"}) == {
-        "subscribing": [], "publishing": ["/chatter"], "services": []}
+        "subscribing": [],
+        "publishing": ["/chatter"],
+        "services": [],
+    }
     assert values(h, client, "/rosapi/node_details", {"node": "/rosbridge_client_3"}) == {
-        "subscribing": [], "publishing": [], "services": ["/set"]}
+        "subscribing": [],
+        "publishing": [],
+        "services": ["/set"],
+    }
     failure = h.call(client, "/rosapi/node_details", {"node": "/ghost"})
     assert failure["result"] is False and "ghost" in failure["values"]
 
@@ -81,22 +101,27 @@ def test_action_queries(graph):
     h, client = graph
     assert values(h, client, "/rosapi/action_servers") == {"action_servers": ["/fib"]}
     assert values(h, client, "/rosapi/action_type", {"action": "/fib"}) == {
-        "type": "example_interfaces/action/Fibonacci"}
-    goal = values(h, client, "/rosapi/action_goal_details",
-                  {"type": "example_interfaces/Fibonacci"})
+        "type": "example_interfaces/action/Fibonacci"
+    }
+    goal = values(
+        h, client, "/rosapi/action_goal_details", {"type": "example_interfaces/Fibonacci"}
+    )
     assert goal["typedefs"][0]["fieldnames"] == ["order"]
 
 
 def test_type_details(harness):
     client = harness.connect()
-    typedefs = values(harness, client, "/rosapi/message_details",
-                      {"type": "geometry_msgs/msg/Pose"})["typedefs"]
+    typedefs = values(
+        harness, client, "/rosapi/message_details", {"type": "geometry_msgs/msg/Pose"}
+    )["typedefs"]
     assert typedefs[0]["type"] == "geometry_msgs/Pose"
     assert typedefs[0]["fieldnames"] == ["position", "orientation"]
-    request = values(harness, client, "/rosapi/service_request_details",
-                     {"type": "std_srvs/SetBool"})["typedefs"]
-    response = values(harness, client, "/rosapi/service_response_details",
-                      {"type": "std_srvs/srv/SetBool"})["typedefs"]
+    request = values(
+        harness, client, "/rosapi/service_request_details", {"type": "std_srvs/SetBool"}
+    )["typedefs"]
+    response = values(
+        harness, client, "/rosapi/service_response_details", {"type": "std_srvs/srv/SetBool"}
+    )["typedefs"]
     assert request[0]["fieldnames"] == ["data"]
     assert response[0]["fieldnames"] == ["success", "message"]
     assert harness.call(client, "/rosapi/message_details", {"type": "no/Such"})["result"] is False
@@ -107,17 +132,19 @@ def test_type_details(harness):
 def test_time_and_version(harness):
     client = harness.connect()
     assert values(harness, client, "/rosapi/get_time") == {
-        "time": {"sec": harness.now_ns // 10**9, "nanosec": harness.now_ns % 10**9}}
-    assert values(harness, client, "/rosapi/get_ros_version") == {"version": 2,
-                                                                 "distro": "jazzy"}
+        "time": {"sec": harness.now_ns // 10**9, "nanosec": harness.now_ns % 10**9}
+    }
+    assert values(harness, client, "/rosapi/get_ros_version") == {"version": 2, "distro": "jazzy"}
 
 
 def test_params_round_trip(harness):
     client = harness.connect()
     name = "/add_two_ints_server:use_sim_time"
     assert values(harness, client, "/rosapi/get_param", {"name": name})["successful"] is False
-    assert values(harness, client, "/rosapi/get_param",
-                  {"name": name, "default_value": "3"})["value"] == "3"
+    assert (
+        values(harness, client, "/rosapi/get_param", {"name": name, "default_value": "3"})["value"]
+        == "3"
+    )
     values(harness, client, "/rosapi/set_param", {"name": name, "value": "true"})
     assert values(harness, client, "/rosapi/get_param", {"name": name})["value"] == "true"
     assert values(harness, client, "/rosapi/has_param", {"name": name}) == {"exists": True}
@@ -130,8 +157,10 @@ def test_params_round_trip(harness):
 
 def test_rosapi_names_cannot_be_taken_over(harness):
     client = harness.connect()
-    harness.send(client, {"op": "advertise_service", "service": "/rosapi/topics",
-                          "type": "rosapi_msgs/Topics"})
+    harness.send(
+        client,
+        {"op": "advertise_service", "service": "/rosapi/topics", "type": "rosapi_msgs/Topics"},
+    )
     assert "/rosapi/topics" not in harness.state.graph.services
 
 
@@ -143,4 +172,7 @@ def test_disconnected_clients_vanish_from_rosapi(graph):
     assert "/set" not in values(h, client, "/rosapi/services")["services"]
     assert values(h, client, "/rosapi/action_servers") == {"action_servers": []}
     assert values(h, client, "/rosapi/nodes")["nodes"] == [
-        "/rosapi", "/rosbridge_client_4", "/rosbridge_websocket"]
+        "/rosapi",
+        "/rosbridge_client_4",
+        "/rosbridge_websocket",
+    ]

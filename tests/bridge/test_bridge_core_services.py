@@ -5,8 +5,9 @@ from __future__ import annotations
 from bridge_harness import CoreHarness
 
 
-def provide(h: CoreHarness, service: str = "/test_service",
-            type_name: str = "std_srvs/SetBool") -> int:
+def provide(
+    h: CoreHarness, service: str = "/test_service", type_name: str = "std_srvs/SetBool"
+) -> int:
     provider = h.connect()
     h.send(provider, {"op": "advertise_service", "service": service, "type": type_name})
     return provider
@@ -15,18 +16,38 @@ def provide(h: CoreHarness, service: str = "/test_service",
 def test_round_trip_between_two_clients(harness):
     provider = provide(harness)
     caller = harness.connect()
-    harness.send(caller, {"op": "call_service", "service": "test_service", "id": "c1",
-                          "args": {"data": True}})
+    harness.send(
+        caller,
+        {"op": "call_service", "service": "test_service", "id": "c1", "args": {"data": True}},
+    )
     request = harness.outbox(provider)
-    assert request == [{"op": "call_service", "id": "service_request:/test_service:1",
-                        "service": "/test_service", "args": {"data": True}}]
-    harness.send(provider, {"op": "service_response", "service": "/test_service",
-                            "id": request[0]["id"], "result": True,
-                            "values": {"success": True, "message": "Hello, world!"}})
-    assert harness.outbox(caller) == [{"op": "service_response", "service": "test_service",
-                                       "values": {"success": True,
-                                                  "message": "Hello, world!"},
-                                       "result": True, "id": "c1"}]
+    assert request == [
+        {
+            "op": "call_service",
+            "id": "service_request:/test_service:1",
+            "service": "/test_service",
+            "args": {"data": True},
+        }
+    ]
+    harness.send(
+        provider,
+        {
+            "op": "service_response",
+            "service": "/test_service",
+            "id": request[0]["id"],
+            "result": True,
+            "values": {"success": True, "message": "Hello, world!"},
+        },
+    )
+    assert harness.outbox(caller) == [
+        {
+            "op": "service_response",
+            "service": "test_service",
+            "values": {"success": True, "message": "Hello, world!"},
+            "result": True,
+            "id": "c1",
+        }
+    ]
     assert harness.state.pending_calls == {}
 
 
@@ -48,8 +69,13 @@ def test_request_that_does_not_fit_the_type_fails_promptly(harness):
 def test_unknown_service_fails_promptly(harness):
     caller = harness.connect()
     response = harness.call(caller, "/x")
-    assert response == {"op": "service_response", "service": "/x",
-                        "values": "Service /x does not exist", "result": False, "id": "call"}
+    assert response == {
+        "op": "service_response",
+        "service": "/x",
+        "values": "Service /x does not exist",
+        "result": False,
+        "id": "call",
+    }
 
 
 def test_values_object_means_success_even_with_result_false(harness):
@@ -57,8 +83,16 @@ def test_values_object_means_success_even_with_result_false(harness):
     caller = harness.connect()
     harness.send(caller, {"op": "call_service", "service": "/test_service", "id": 1})
     request_id = harness.outbox(provider)[0]["id"]
-    harness.send(provider, {"op": "service_response", "service": "/test_service",
-                            "id": request_id, "result": False, "values": {"success": True}})
+    harness.send(
+        provider,
+        {
+            "op": "service_response",
+            "service": "/test_service",
+            "id": request_id,
+            "result": False,
+            "values": {"success": True},
+        },
+    )
     response = harness.outbox(caller)[0]
     assert response["result"] is True
     assert response["values"] == {"success": True, "message": ""}
@@ -69,19 +103,32 @@ def test_failure_text_from_provider_is_passed_on(harness):
     caller = harness.connect()
     harness.send(caller, {"op": "call_service", "service": "/test_service", "id": 1})
     request_id = harness.outbox(provider)[0]["id"]
-    harness.send(provider, {"op": "service_response", "service": "/test_service",
-                            "id": request_id, "result": False, "values": "broken"})
-    assert harness.outbox(caller)[0] == {"op": "service_response",
-                                              "service": "/test_service", "values": "broken",
-                                              "result": False, "id": 1}
+    harness.send(
+        provider,
+        {
+            "op": "service_response",
+            "service": "/test_service",
+            "id": request_id,
+            "result": False,
+            "values": "broken",
+        },
+    )
+    assert harness.outbox(caller)[0] == {
+        "op": "service_response",
+        "service": "/test_service",
+        "values": "broken",
+        "result": False,
+        "id": 1,
+    }
 
 
 def test_calls_time_out_with_the_default_or_their_own_timeout(harness):
     provider = provide(harness)
     caller = harness.connect()
     harness.send(caller, {"op": "call_service", "service": "/test_service", "id": "default"})
-    harness.send(caller, {"op": "call_service", "service": "/test_service", "id": "short",
-                          "timeout": 0.5})
+    harness.send(
+        caller, {"op": "call_service", "service": "/test_service", "id": "short", "timeout": 0.5}
+    )
     harness.advance(1.0)
     assert [(r["id"], r["result"]) for r in harness.outbox(caller)] == [("short", False)]
     harness.advance(5.0)
@@ -89,8 +136,16 @@ def test_calls_time_out_with_the_default_or_their_own_timeout(harness):
     assert [(r["id"], r["result"]) for r in late] == [("default", False)]
     assert "timed out" in late[0]["values"]
     first_request = harness.outbox(provider)[0]["id"]
-    harness.send(provider, {"op": "service_response", "service": "/test_service",
-                            "id": first_request, "result": True, "values": {}})
+    harness.send(
+        provider,
+        {
+            "op": "service_response",
+            "service": "/test_service",
+            "id": first_request,
+            "result": True,
+            "values": {},
+        },
+    )
     assert harness.outbox(caller) == []
 
 
@@ -115,11 +170,18 @@ def test_re_advertising_replaces_the_provider_and_restarts_ids(harness):
     harness.send(caller, {"op": "call_service", "service": "/test_service", "id": "old"})
     second = provide(harness)
     assert harness.outbox(caller)[0]["result"] is False
-    harness.send(caller, {"op": "call_service", "service": "/test_service", "id": "new",
-                          "args": {"data": False}})
-    assert harness.outbox(second) == [{"op": "call_service",
-                                       "id": "service_request:/test_service:1",
-                                       "service": "/test_service", "args": {"data": False}}]
+    harness.send(
+        caller,
+        {"op": "call_service", "service": "/test_service", "id": "new", "args": {"data": False}},
+    )
+    assert harness.outbox(second) == [
+        {
+            "op": "call_service",
+            "id": "service_request:/test_service:1",
+            "service": "/test_service",
+            "args": {"data": False},
+        }
+    ]
     harness.outbox(first)
     harness.disconnect(first)
     assert harness.state.graph.services["/test_service"].provider == "/rosbridge_client_3"
@@ -131,8 +193,16 @@ def test_caller_disconnect_leaves_provider_response_harmless(harness):
     harness.send(caller, {"op": "call_service", "service": "/test_service", "id": 1})
     request_id = harness.outbox(provider)[0]["id"]
     harness.disconnect(caller)
-    harness.send(provider, {"op": "service_response", "service": "/test_service",
-                            "id": request_id, "result": True, "values": {}})
+    harness.send(
+        provider,
+        {
+            "op": "service_response",
+            "service": "/test_service",
+            "id": request_id,
+            "result": True,
+            "values": {},
+        },
+    )
     assert harness.state.pending_calls == {}
     assert harness.outbox(provider) == []
 
@@ -140,12 +210,22 @@ def test_caller_disconnect_leaves_provider_response_harmless(harness):
 def test_untyped_service_is_relayed_as_json(harness):
     provider = provide(harness, "/custom", "my_pkg/srv/Unknown")
     caller = harness.connect()
-    harness.send(caller, {"op": "call_service", "service": "/custom", "id": 1,
-                          "args": {"anything": [1, "two"]}})
+    harness.send(
+        caller,
+        {"op": "call_service", "service": "/custom", "id": 1, "args": {"anything": [1, "two"]}},
+    )
     request = harness.outbox(provider)[0]
     assert request["args"] == {"anything": [1, "two"]}
-    harness.send(provider, {"op": "service_response", "service": "/custom", "id": request["id"],
-                            "result": True, "values": {"free": "form"}})
+    harness.send(
+        provider,
+        {
+            "op": "service_response",
+            "service": "/custom",
+            "id": request["id"],
+            "result": True,
+            "values": {"free": "form"},
+        },
+    )
     assert harness.outbox(caller)[0]["values"] == {"free": "form"}
 
 
@@ -161,8 +241,16 @@ def test_malformed_provider_response_fails_the_call_at_once(harness):
     caller = harness.connect()
     harness.send(caller, {"op": "call_service", "service": "/test_service", "id": 1})
     request_id = harness.outbox(provider)[0]["id"]
-    harness.send(provider, {"op": "service_response", "service": "/test_service",
-                            "id": request_id, "values": {}, "result": "yes"})
+    harness.send(
+        provider,
+        {
+            "op": "service_response",
+            "service": "/test_service",
+            "id": request_id,
+            "values": {},
+            "result": "yes",
+        },
+    )
     response = harness.outbox(caller)[0]
     assert response["result"] is False and "result" in response["values"]
 
@@ -173,8 +261,15 @@ def test_response_without_result_but_with_values_succeeds(harness):
     caller = harness.connect()
     harness.send(caller, {"op": "call_service", "service": "/test_service", "id": 1})
     request_id = harness.outbox(provider)[0]["id"]
-    harness.send(provider, {"op": "service_response", "service": "/test_service",
-                            "id": request_id, "values": {"success": True}})
+    harness.send(
+        provider,
+        {
+            "op": "service_response",
+            "service": "/test_service",
+            "id": request_id,
+            "values": {"success": True},
+        },
+    )
     response = harness.outbox(caller)[0]
     assert response["result"] is True
     assert response["values"] == {"success": True, "message": ""}
@@ -220,4 +315,3 @@ def test_a_failing_handler_still_answers_the_caller(harness):
     response = harness.call(caller, "/rosapi/broken")
     assert response["result"] is False and "bug" in response["values"]
     assert harness.call(caller, "/rosapi/nodes")["result"] is True
-

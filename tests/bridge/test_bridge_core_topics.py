@@ -11,8 +11,13 @@ from bridge.outgoing import MIN_FRAGMENT_SIZE
 from schemas.codec_cdr import from_cdr
 
 
-def advertise(h: CoreHarness, client: int, topic: str = "/chatter",
-              type_name: str = "std_msgs/String", **extra) -> None:
+def advertise(
+    h: CoreHarness,
+    client: int,
+    topic: str = "/chatter",
+    type_name: str = "std_msgs/String",
+    **extra,
+) -> None:
     h.send(client, {"op": "advertise", "topic": topic, "type": type_name, **extra})
 
 
@@ -25,8 +30,7 @@ def test_publish_reaches_subscriber_with_its_topic_spelling(harness):
     harness.send(sub, {"op": "subscribe", "topic": "chatter", "type": "std_msgs/msg/String"})
     advertise(harness, pub)
     publish(harness, pub, {"data": "hello"})
-    assert harness.outbox(sub) == [{"op": "publish", "topic": "chatter",
-                                    "msg": {"data": "hello"}}]
+    assert harness.outbox(sub) == [{"op": "publish", "topic": "chatter", "msg": {"data": "hello"}}]
     assert harness.outbox(pub) == []
 
 
@@ -139,8 +143,9 @@ def test_throttle_without_queue_drops_inside_the_window(harness):
 def test_throttle_with_queue_keeps_the_newest_and_releases_on_time(harness):
     pub, sub = harness.connect(), harness.connect()
     advertise(harness, pub)
-    harness.send(sub, {"op": "subscribe", "topic": "/chatter", "throttle_rate": 100,
-                       "queue_length": 2})
+    harness.send(
+        sub, {"op": "subscribe", "topic": "/chatter", "throttle_rate": 100, "queue_length": 2}
+    )
     for i in range(5):
         publish(harness, pub, {"data": str(i)})
     assert [m["msg"]["data"] for m in harness.outbox(sub)] == ["0"]
@@ -156,13 +161,23 @@ def test_queue_flushes_newest_when_throttle_is_lifted(harness):
     """rosbridge's test: throttle 10 s, queue 10, 1000 messages -> first, then 990..999."""
     pub, sub = harness.connect(), harness.connect()
     advertise(harness, pub)
-    harness.send(sub, {"op": "subscribe", "topic": "/chatter", "id": "q",
-                       "throttle_rate": 10_000, "queue_length": 10})
+    harness.send(
+        sub,
+        {
+            "op": "subscribe",
+            "topic": "/chatter",
+            "id": "q",
+            "throttle_rate": 10_000,
+            "queue_length": 10,
+        },
+    )
     for i in range(1000):
         publish(harness, pub, {"data": str(i)})
     assert [m["msg"]["data"] for m in harness.outbox(sub)] == ["0"]
-    harness.send(sub, {"op": "subscribe", "topic": "/chatter", "id": "q",
-                       "throttle_rate": 0, "queue_length": 10})
+    harness.send(
+        sub,
+        {"op": "subscribe", "topic": "/chatter", "id": "q", "throttle_rate": 0, "queue_length": 10},
+    )
     assert [m["msg"]["data"] for m in harness.outbox(sub)] == [str(i) for i in range(990, 1000)]
 
 
@@ -182,8 +197,15 @@ def test_cbor_and_cbor_raw_frames(harness, registry):
     harness.send(sub, {"op": "subscribe", "topic": "/imu", "compression": "cbor"})
     harness.send(raw, {"op": "subscribe", "topic": "/imu", "compression": "cbor-raw"})
     covariance = [float(i) for i in range(9)]
-    publish(harness, pub, {"header": {"frame_id": "imu", "stamp": {"sec": 5, "nanosec": 6}},
-                           "angular_velocity_covariance": covariance}, topic="/imu")
+    publish(
+        harness,
+        pub,
+        {
+            "header": {"frame_id": "imu", "stamp": {"sec": 5, "nanosec": 6}},
+            "angular_velocity_covariance": covariance,
+        },
+        topic="/imu",
+    )
     decoded = harness.outbox(sub)[0]["msg"]
     assert decoded["header"] == {"stamp": {"sec": 5, "nanosec": 6}, "frame_id": "imu"}
     assert decoded["angular_velocity_covariance"] == covariance
@@ -206,8 +228,15 @@ def test_encoded_once_and_shared_by_all_subscribers(harness):
 
 def test_numeric_sequences_arrive_as_typed_arrays_in_cbor(harness):
     pub, sub = harness.connect(), harness.connect()
-    harness.send(sub, {"op": "subscribe", "topic": "/arr", "type": "std_msgs/Float32MultiArray",
-                       "compression": "cbor"})
+    harness.send(
+        sub,
+        {
+            "op": "subscribe",
+            "topic": "/arr",
+            "type": "std_msgs/Float32MultiArray",
+            "compression": "cbor",
+        },
+    )
     publish(harness, pub, {"data": [1.5, 2.5, 3.5]}, topic="/arr")
     data = harness.outbox(sub)[0]["msg"]["data"]
     assert isinstance(data, np.ndarray) and data.dtype == np.float32
@@ -257,8 +286,9 @@ def test_cbor_publish_from_clients(harness):
 
     pub, sub = harness.connect(), harness.connect()
     harness.send(sub, {"op": "subscribe", "topic": "/chatter", "type": "std_msgs/String"})
-    harness.send(pub, codec_cbor.dumps({"op": "publish", "topic": "/chatter",
-                                        "msg": {"data": "cbor"}}))
+    harness.send(
+        pub, codec_cbor.dumps({"op": "publish", "topic": "/chatter", "msg": {"data": "cbor"}})
+    )
     assert harness.outbox(sub)[0]["msg"]["data"] == "cbor"
 
 
@@ -326,24 +356,35 @@ def test_a_publish_checked_off_the_loop_is_not_checked_again_and_keeps_its_sizes
     harness = CoreHarness(registry, offload_threshold_bytes=1)
     pub = harness.connect()
     advertise(harness, pub, topic="/fix", type_name="sensor_msgs/NavSatFix", latch=True)
-    frame = read_frame(json.dumps({"op": "publish", "topic": "/fix", "latch": True, "msg": {
-        "header": {"stamp": {"sec": 3, "nanosec": 4}, "frame_id": "gnss"}, "latitude": 51.6}}),
-        harness.now_ns)
+    frame = read_frame(
+        json.dumps(
+            {
+                "op": "publish",
+                "topic": "/fix",
+                "latch": True,
+                "msg": {
+                    "header": {"stamp": {"sec": 3, "nanosec": 4}, "frame_id": "gnss"},
+                    "latitude": 51.6,
+                },
+            }
+        ),
+        harness.now_ns,
+    )
     work = harness.core.offload(frame, harness.now_ns)
     assert work is not None and work.spec is registry.message("sensor_msgs/msg/NavSatFix")
     checked = work.run()
     assert isinstance(checked, ValidMessage)
     assert checked.size_hint >= frame.wire_bytes
     assert checked.cdr_bytes == cdr_size(registry, "sensor_msgs/msg/NavSatFix", checked.msg)
-    harness._record(harness.core.receive_frame(pub, replace(frame, checked=checked),
-                                               harness.now_ns))
+    harness._record(
+        harness.core.receive_frame(pub, replace(frame, checked=checked), harness.now_ns)
+    )
     latched = harness.state.graph.topics["/fix"].latched
     assert latched.msg is checked.msg, "the worker's message is the one published"
     assert (latched.size_hint, latched.cdr_bytes) == (checked.size_hint, checked.cdr_bytes)
 
 
-def test_a_publish_checked_off_the_loop_is_checked_again_when_the_topic_changed_type(
-        registry):
+def test_a_publish_checked_off_the_loop_is_checked_again_when_the_topic_changed_type(registry):
     import json
 
     from bridge.inbound import read_frame
@@ -351,16 +392,18 @@ def test_a_publish_checked_off_the_loop_is_checked_again_when_the_topic_changed_
     harness = CoreHarness(registry, offload_threshold_bytes=1)
     pub, sub = harness.connect(), harness.connect()
     advertise(harness, pub, topic="/t", type_name="std_msgs/String")
-    frame = read_frame(json.dumps({"op": "publish", "topic": "/t", "msg": {"data": "hello"}}),
-                       harness.now_ns)
+    frame = read_frame(
+        json.dumps({"op": "publish", "topic": "/t", "msg": {"data": "hello"}}), harness.now_ns
+    )
     work = harness.core.offload(frame, harness.now_ns)
     assert work is not None
     checked = work.run()
     harness.send(pub, {"op": "unadvertise", "topic": "/t"})
     advertise(harness, pub, topic="/t", type_name="std_msgs/Int32")
     harness.send(sub, {"op": "subscribe", "topic": "/t"})
-    harness._record(harness.core.receive_frame(pub, replace(frame, checked=checked),
-                                               harness.now_ns))
+    harness._record(
+        harness.core.receive_frame(pub, replace(frame, checked=checked), harness.now_ns)
+    )
     assert harness.outbox(sub) == [], "a String is no Int32"
     publish(harness, pub, {"data": 7}, topic="/t")
     assert [m["msg"] for m in harness.outbox(sub)] == [{"data": 7}]
@@ -377,14 +420,27 @@ def test_topic_glob_gates_advertise_publish_and_subscribe(registry):
 
 def test_fragment_size_in_any_message_applies_to_the_whole_client(harness):
     client = harness.connect()
-    harness.send(client, {"op": "call_service", "service": "/rosapi/message_details",
-                          "args": {"type": "sensor_msgs/msg/Imu"}, "fragment_size": 1000,
-                          "id": "v"})
+    harness.send(
+        client,
+        {
+            "op": "call_service",
+            "service": "/rosapi/message_details",
+            "args": {"type": "sensor_msgs/msg/Imu"},
+            "fragment_size": 1000,
+            "id": "v",
+        },
+    )
     fragments = harness.outbox(client)
     assert len(fragments) > 1 and {f["id"] for f in fragments} == {"v"}
     harness.send(client, {"op": "set_level", "level": "none", "fragment_size": None})
-    harness.send(client, {"op": "call_service", "service": "/rosapi/message_details",
-                          "args": {"type": "sensor_msgs/msg/Imu"}})
+    harness.send(
+        client,
+        {
+            "op": "call_service",
+            "service": "/rosapi/message_details",
+            "args": {"type": "sensor_msgs/msg/Imu"},
+        },
+    )
     assert harness.outbox(client)[0]["op"] == "service_response"
 
 
@@ -402,8 +458,11 @@ def test_external_sinks_and_sources_share_the_graph(harness):
     pub, sub = harness.connect(), harness.connect()
     harness.send(sub, {"op": "subscribe", "topic": "/dds", "type": "std_msgs/String"})
     publish(harness, pub, {"data": "from ws"}, topic="/dds")
-    harness._record(harness.core.publish_external("/dds_node", "/dds", "std_msgs/String",
-                                                  {"data": "from dds"}, harness.now_ns))
+    harness._record(
+        harness.core.publish_external(
+            "/dds_node", "/dds", "std_msgs/String", {"data": "from dds"}, harness.now_ns
+        )
+    )
     assert [m["msg"]["data"] for m in harness.outbox(sub)] == ["from ws", "from dds"]
     assert sink.seen == [("/dds", "/rosbridge_client_1"), ("/dds", "/dds_node")]
     assert "/dds_node" in harness.state.graph.topics["/dds"].publishers
@@ -411,9 +470,7 @@ def test_external_sinks_and_sources_share_the_graph(harness):
 
 def test_latched_publish_after_unadvertise_leaves_no_publisher(harness):
     client = harness.connect()
-    harness.send(client, {"op": "advertise", "topic": "/l", "type": "std_msgs/String",
-                          "id": "adv"})
-    harness.send(client, {"op": "publish", "topic": "/l", "msg": {}, "latch": True,
-                          "id": "pub:1"})
+    harness.send(client, {"op": "advertise", "topic": "/l", "type": "std_msgs/String", "id": "adv"})
+    harness.send(client, {"op": "publish", "topic": "/l", "msg": {}, "latch": True, "id": "pub:1"})
     harness.send(client, {"op": "unadvertise", "topic": "/l", "id": "adv"})
     assert "/l" not in harness.state.graph.topics

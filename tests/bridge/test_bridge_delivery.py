@@ -38,8 +38,11 @@ async def settle(ws) -> None:
 
 
 async def subscribe(ws, topic: str, type_name: str, compression: str = "none") -> None:
-    await ws.send(json.dumps({"op": "subscribe", "topic": topic, "type": type_name,
-                              "compression": compression}))
+    await ws.send(
+        json.dumps(
+            {"op": "subscribe", "topic": topic, "type": type_name, "compression": compression}
+        )
+    )
     await settle(ws)
 
 
@@ -72,11 +75,14 @@ def seq_of(message: dict) -> int:
 
 @pytest.mark.parametrize("binary", [False, True], ids=["json", "cbor"])
 async def test_a_reading_subscriber_loses_none_of_a_20000_burst(bridge, binary):
-    async with (websockets.connect(bridge.url) as pub,
-                websockets.connect(bridge.url, max_size=None) as sub):
+    async with (
+        websockets.connect(bridge.url) as pub,
+        websockets.connect(bridge.url, max_size=None) as sub,
+    ):
         await subscribe(sub, "/chatter", "std_msgs/msg/String", "cbor" if binary else "none")
-        await pub.send(json.dumps({"op": "advertise", "topic": "/chatter",
-                                   "type": "std_msgs/msg/String"}))
+        await pub.send(
+            json.dumps({"op": "advertise", "topic": "/chatter", "type": "std_msgs/msg/String"})
+        )
         reader = asyncio.create_task(read_publishes(sub, BURST))
         await publish_numbered(pub, BURST, binary=binary)
         got = await reader
@@ -97,12 +103,13 @@ async def stalled_subscriber(url: str, topic: str) -> websockets.ClientConnectio
     return ws
 
 
-async def test_a_client_that_stops_reading_loses_its_oldest_counted_and_nobody_else_does(
-        registry):
+async def test_a_client_that_stops_reading_loses_its_oldest_counted_and_nobody_else_does(registry):
     limit = 256 * 1024
-    async with (run_bridge(BridgeConfig(port=0, send_buffer_bytes=limit), registry) as bridge,
-                websockets.connect(bridge.url) as pub,
-                websockets.connect(bridge.url, max_size=None) as reader):
+    async with (
+        run_bridge(BridgeConfig(port=0, send_buffer_bytes=limit), registry) as bridge,
+        websockets.connect(bridge.url) as pub,
+        websockets.connect(bridge.url, max_size=None) as reader,
+    ):
         stalled = await stalled_subscriber(bridge.url, "/chatter")
         await subscribe(reader, "/chatter", "std_msgs/msg/String")
         reading = asyncio.create_task(read_publishes(reader, BURST))
@@ -131,12 +138,15 @@ async def test_a_slow_reader_paces_the_publisher_and_loses_nothing(registry):
     the 2 s a subscriber may stay backed up before it counts as slow, even on a busy
     machine)."""
     count = 2_000
-    async with (run_bridge(BridgeConfig(port=0, send_buffer_bytes=256 * 1024), registry)
-                as bridge, websockets.connect(bridge.url) as pub):
+    async with (
+        run_bridge(BridgeConfig(port=0, send_buffer_bytes=256 * 1024), registry) as bridge,
+        websockets.connect(bridge.url) as pub,
+    ):
         slow = await stalled_subscriber(bridge.url, "/chatter")
         for link in bridge.server.links.values():  # a thin pipe: the kernel buffers little
             link.ws.transport.get_extra_info("socket").setsockopt(
-                socket.SOL_SOCKET, socket.SO_SNDBUF, 4096)
+                socket.SOL_SOCKET, socket.SO_SNDBUF, 4096
+            )
 
         async def read_slowly() -> list[int]:
             seqs: list[int] = []
@@ -156,23 +166,39 @@ async def test_order_per_topic_holds_and_other_topics_overtake_a_big_frame(bridg
     """A MarkerArray of 3,000 markers takes the worker tens of ms to validate (and, for the
     JSON subscriber, to encode): small frames sent after it on the same connection overtake it
     on another topic and wait for it on its own topic."""
-    markers = {"markers": [{"header": {"frame_id": "map"}, "ns": "n", "id": i,
-                            "pose": {"position": {"x": float(i)}}} for i in range(3_000)]}
-    async with (websockets.connect(bridge.url, max_size=None) as pub,
-                websockets.connect(bridge.url, max_size=None) as sub):
-        for topic, type_name in (("/big", "visualization_msgs/msg/MarkerArray"),
-                                 ("/small", "std_msgs/msg/String")):
+    markers = {
+        "markers": [
+            {
+                "header": {"frame_id": "map"},
+                "ns": "n",
+                "id": i,
+                "pose": {"position": {"x": float(i)}},
+            }
+            for i in range(3_000)
+        ]
+    }
+    async with (
+        websockets.connect(bridge.url, max_size=None) as pub,
+        websockets.connect(bridge.url, max_size=None) as sub,
+    ):
+        for topic, type_name in (
+            ("/big", "visualization_msgs/msg/MarkerArray"),
+            ("/small", "std_msgs/msg/String"),
+        ):
             await subscribe(sub, topic, type_name)
             await pub.send(json.dumps({"op": "advertise", "topic": topic, "type": type_name}))
         await settle(pub)
         await pub.send(json.dumps({"op": "publish", "topic": "/big", "msg": markers}))
         for n in range(3):
-            await pub.send(json.dumps({"op": "publish", "topic": "/small",
-                                       "msg": {"data": str(n)}}))
+            await pub.send(
+                json.dumps({"op": "publish", "topic": "/small", "msg": {"data": str(n)}})
+            )
         await pub.send(json.dumps({"op": "publish", "topic": "/big", "msg": {"markers": []}}))
         got = await read_publishes(sub, 5)
-    order = [(m["topic"], len(m["msg"]["markers"]) if m["topic"] == "/big" else
-              m["msg"]["data"]) for m in got]
+    order = [
+        (m["topic"], len(m["msg"]["markers"]) if m["topic"] == "/big" else m["msg"]["data"])
+        for m in got
+    ]
     assert order.index(("/small", "0")) < order.index(("/big", 3_000))  # overtaken
     assert [o for o in order if o[0] == "/small"] == [("/small", str(n)) for n in range(3)]
     assert [o for o in order if o[0] == "/big"] == [("/big", 3_000), ("/big", 0)]  # in order
@@ -191,15 +217,23 @@ async def next_reassembled(ws, pieces: dict[str, dict[int, str]]) -> dict:
 
 
 async def test_back_to_back_messages_are_fragmented_under_distinct_ids(bridge):
-    async with (websockets.connect(bridge.url) as pub,
-                websockets.connect(bridge.url) as sub):
-        await sub.send(json.dumps({"op": "subscribe", "topic": "/chatter",
-                                   "type": "std_msgs/msg/String", "fragment_size": 1000}))
+    async with websockets.connect(bridge.url) as pub, websockets.connect(bridge.url) as sub:
+        await sub.send(
+            json.dumps(
+                {
+                    "op": "subscribe",
+                    "topic": "/chatter",
+                    "type": "std_msgs/msg/String",
+                    "fragment_size": 1000,
+                }
+            )
+        )
         await settle(sub)  # the answer is shorter than a fragment
         texts = [f"{n} " + "y" * 2500 for n in range(3)]
         for text in texts:
-            await pub.send(json.dumps({"op": "publish", "topic": "/chatter",
-                                       "msg": {"data": text}}))
+            await pub.send(
+                json.dumps({"op": "publish", "topic": "/chatter", "msg": {"data": text}})
+            )
         pieces: dict[str, dict[int, str]] = {}
         got = [await next_reassembled(sub, pieces) for _ in texts]
     assert [m["msg"]["data"] for m in got] == texts
@@ -211,13 +245,16 @@ FLOOD = 1000
 
 @pytest.mark.parametrize("offload_bytes", [1 << 30, 1], ids=["inline", "worker"])
 async def test_a_flood_of_unencodable_messages_logs_a_few_lines_and_costs_nothing_else(
-        registry, caplog, offload_bytes):
+    registry, caplog, offload_bytes
+):
     """A source hands the bridge messages whose CDR is broken (`bytes(-1)` fails): each is
     lost alone, the log gets at most `LINES_PER_WINDOW` one-line errors and a summary, and the
     same client's other topic and another client receive every message."""
     config = BridgeConfig(port=0, offload_threshold_bytes=offload_bytes)
-    async with (run_bridge(config, registry) as bridge,
-                websockets.connect(bridge.url, max_size=None) as plain):
+    async with (
+        run_bridge(config, registry) as bridge,
+        websockets.connect(bridge.url, max_size=None) as plain,
+    ):
         await subscribe(plain, "/chatter", "std_msgs/msg/String")
         async with websockets.connect(bridge.url, max_size=None) as raw:
             await subscribe(raw, "/odd", "std_msgs/msg/String", "cbor-raw")
@@ -225,10 +262,16 @@ async def test_a_flood_of_unencodable_messages_logs_a_few_lines_and_costs_nothin
             readers = [asyncio.create_task(read_publishes(ws, FLOOD)) for ws in (raw, plain)]
             for seq in range(FLOOD):
                 now_ns = time.time_ns()
-                bridge.server.apply(bridge.core.publish_external(
-                    "/source", "/odd", "std_msgs/msg/String", {"data": "odd"}, now_ns, cdr=-1))
-                bridge.server.apply(bridge.core.publish_external(
-                    "/source", "/chatter", "std_msgs/msg/String", {"data": f"{seq}"}, now_ns))
+                bridge.server.apply(
+                    bridge.core.publish_external(
+                        "/source", "/odd", "std_msgs/msg/String", {"data": "odd"}, now_ns, cdr=-1
+                    )
+                )
+                bridge.server.apply(
+                    bridge.core.publish_external(
+                        "/source", "/chatter", "std_msgs/msg/String", {"data": f"{seq}"}, now_ns
+                    )
+                )
                 if seq % 100 == 0:
                     await asyncio.sleep(0)
             got_raw, got_plain = await asyncio.gather(*readers)

@@ -38,26 +38,33 @@ def assert_everything_sent_encodes(h: CoreHarness) -> None:
 def provider_and_caller(h: CoreHarness) -> tuple[int, int, str]:
     """A provider of /svc (std_srvs/Trigger) and a caller whose call it now holds."""
     provider, caller = h.connect(), h.connect()
-    h.send(provider, {"op": "advertise_service", "service": "/svc",
-                      "type": "std_srvs/srv/Trigger"})
+    h.send(provider, {"op": "advertise_service", "service": "/svc", "type": "std_srvs/srv/Trigger"})
     h.send(caller, {"op": "call_service", "service": "/svc", "id": "c1"})
     [request] = h.outbox(provider)
     return provider, caller, request["id"]
 
 
-@pytest.mark.parametrize("frame", [
-    '{"op":"publish","topic":"/a","msg":{"data":"\\ud800"}}',
-    '{"op":"publish","topic":"/a","msg":{"data":NaN,"x":100000000000000000000000}}',
-    '{"op":"publish","topic":"/a","msg":{"data":"' + "\\udfff" * 3 + '"}}',
-    cbor2.dumps({"op": "publish", "topic": "/a", "msg": {"data": cbor2.undefined}}),
-    cbor2.dumps({"op": "publish", "topic": "/a", "msg": {"data": {1, 2}}}),
-    cbor2.dumps({"op": "publish", "topic": "/a", "msg": {1: "x"}}),
-    cbor2.dumps({"op": "publish", "topic": "/a", "msg": {"data": cbor2.CBORTag(999, 1)}}),
-    cbor2.dumps({"op": "publish", "topic": "/a", "msg": {"data": 10**400}}),
-    cbor2.dumps({"op": "publish", "topic": "/a", "msg": {"data": cbor2.CBORSimpleValue(99)}}),
-    cbor2.dumps({"op": "publish", "topic": "/a",
-                 "msg": {"data": cbor2.CBORTag(0, "2020-01-01T00:00:00Z")}}),
-])
+@pytest.mark.parametrize(
+    "frame",
+    [
+        '{"op":"publish","topic":"/a","msg":{"data":"\\ud800"}}',
+        '{"op":"publish","topic":"/a","msg":{"data":NaN,"x":100000000000000000000000}}',
+        '{"op":"publish","topic":"/a","msg":{"data":"' + "\\udfff" * 3 + '"}}',
+        cbor2.dumps({"op": "publish", "topic": "/a", "msg": {"data": cbor2.undefined}}),
+        cbor2.dumps({"op": "publish", "topic": "/a", "msg": {"data": {1, 2}}}),
+        cbor2.dumps({"op": "publish", "topic": "/a", "msg": {1: "x"}}),
+        cbor2.dumps({"op": "publish", "topic": "/a", "msg": {"data": cbor2.CBORTag(999, 1)}}),
+        cbor2.dumps({"op": "publish", "topic": "/a", "msg": {"data": 10**400}}),
+        cbor2.dumps({"op": "publish", "topic": "/a", "msg": {"data": cbor2.CBORSimpleValue(99)}}),
+        cbor2.dumps(
+            {
+                "op": "publish",
+                "topic": "/a",
+                "msg": {"data": cbor2.CBORTag(0, "2020-01-01T00:00:00Z")},
+            }
+        ),
+    ],
+)
 def test_unencodable_values_are_refused_at_the_door_with_one_line(harness, caplog_core, frame):
     pub, sub = harness.connect(), harness.connect()
     harness.send(sub, {"op": "subscribe", "topic": "/a", "type": "std_msgs/String"})
@@ -72,8 +79,12 @@ def test_unencodable_values_are_refused_at_the_door_with_one_line(harness, caplo
 
 def test_a_providers_unencodable_answer_fails_its_callers_call(harness):
     provider, caller, request_id = provider_and_caller(harness)
-    harness.send(provider, '{"op":"service_response","service":"/svc","id":"' + request_id
-                 + '","result":true,"values":{"message":"\\ud800"}}')
+    harness.send(
+        provider,
+        '{"op":"service_response","service":"/svc","id":"'
+        + request_id
+        + '","result":true,"values":{"message":"\\ud800"}}',
+    )
     [answer] = harness.outbox(caller)
     assert answer["op"] == "service_response" and answer["id"] == "c1"
     assert answer["result"] is False and "lone surrogate" in answer["values"]
@@ -82,8 +93,9 @@ def test_a_providers_unencodable_answer_fails_its_callers_call(harness):
 
 def test_a_refused_call_is_still_answered_with_its_id(harness):
     caller = harness.connect()
-    harness.send(caller, '{"op":"call_service","service":"/rosapi/topics","id":"x",'
-                         '"args":{"bad":"\\ud800"}}')
+    harness.send(
+        caller, '{"op":"call_service","service":"/rosapi/topics","id":"x","args":{"bad":"\\ud800"}}'
+    )
     [answer] = harness.outbox(caller)
     assert (answer["id"], answer["result"]) == ("x", False)
 
@@ -91,8 +103,9 @@ def test_a_refused_call_is_still_answered_with_its_id(harness):
 @pytest.mark.parametrize("timeout", ["1e400", "-1e400", "NaN"])
 def test_a_non_finite_timeout_fails_the_call_cleanly(harness, timeout):
     caller = harness.connect()
-    harness.send(caller, '{"op":"call_service","service":"/rosapi/topics","id":"t",'
-                         f'"timeout":{timeout}}}')
+    harness.send(
+        caller, f'{{"op":"call_service","service":"/rosapi/topics","id":"t","timeout":{timeout}}}'
+    )
     [answer] = harness.outbox(caller)
     assert answer["result"] is False and "timeout" in answer["values"]
 
@@ -112,16 +125,18 @@ def test_integers_are_checked_against_the_ros_field_type(harness):
 def test_deep_nesting_is_refused(harness):
     caller = harness.connect()
     deep = "[" * 300 + "]" * 300
-    harness.send(caller, '{"op":"call_service","service":"/rosapi/topics","id":"d",'
-                         f'"args":{{"x":{deep}}}}}')
+    harness.send(
+        caller, f'{{"op":"call_service","service":"/rosapi/topics","id":"d","args":{{"x":{deep}}}}}'
+    )
     [answer] = harness.outbox(caller)
     assert answer["result"] is False and "nesting deeper" in answer["values"]
 
 
 def test_a_long_id_is_refused_and_not_echoed(harness):
     caller = harness.connect()
-    harness.send(caller, {"op": "call_service", "service": "/rosapi/topics",
-                          "id": "i" * (MAX_ID_CHARS + 1)})
+    harness.send(
+        caller, {"op": "call_service", "service": "/rosapi/topics", "id": "i" * (MAX_ID_CHARS + 1)}
+    )
     [answer] = harness.outbox(caller)
     assert answer["result"] is False and "id" not in answer
     assert len(answer["values"]) < 500
@@ -129,8 +144,7 @@ def test_a_long_id_is_refused_and_not_echoed(harness):
 
 def test_a_huge_bad_service_name_is_answered_small(harness):
     caller = harness.connect()
-    request = {"op": "call_service", "service": "/" + "é" * 250_000, "id": "a",
-               "fragment_size": 1}
+    request = {"op": "call_service", "service": "/" + "é" * 250_000, "id": "a", "fragment_size": 1}
     harness.send(caller, request)
     frames = harness.frames(caller)
     assert len(frames) <= 5 and sum(len(f.data) for f in frames) < 6_000
@@ -143,8 +157,10 @@ def test_a_flood_of_bad_frames_logs_a_few_lines_and_a_summary(harness, caplog_co
     assert len(core_lines(caplog_core)) == LINES_PER_WINDOW
     harness.advance(WINDOW_S)
     summary = core_lines(caplog_core)[-1].getMessage()
-    assert summary == (f"[/rosbridge_client_1] 500 bad frames in the last {WINDOW_S} s, "
-                       f"{500 - LINES_PER_WINDOW} not logged")
+    assert summary == (
+        f"[/rosbridge_client_1] 500 bad frames in the last {WINDOW_S} s, "
+        f"{500 - LINES_PER_WINDOW} not logged"
+    )
     harness.send(client, b"\xff")  # a new window logs again
     assert len(core_lines(caplog_core)) == LINES_PER_WINDOW + 2
 
@@ -158,8 +174,7 @@ def test_log_lines_echo_client_input_short_and_on_one_line(harness, caplog_core)
         assert len(text) < 700 and "\n" not in text and text.isprintable()
 
 
-def test_a_bug_in_a_handler_costs_one_op_not_the_connection(harness, caplog_core,
-                                                             monkeypatch):
+def test_a_bug_in_a_handler_costs_one_op_not_the_connection(harness, caplog_core, monkeypatch):
     from bridge import core
     from bridge.ops import route
     from schemas.ops import CallService

@@ -61,10 +61,12 @@ async def healthy(url: str, stop: asyncio.Event) -> tuple[int, set[int]]:
     """Publish a sequence on /healthy until `stop`, then return (published, received)."""
     received: set[int] = set()
     async with websockets.connect(url) as sub, websockets.connect(url) as pub:
-        await sub.send(json.dumps({"op": "subscribe", "topic": HEALTHY_TOPIC,
-                                   "type": "std_msgs/msg/Int64"}))
-        await pub.send(json.dumps({"op": "advertise", "topic": HEALTHY_TOPIC,
-                                   "type": "std_msgs/msg/Int64"}))
+        await sub.send(
+            json.dumps({"op": "subscribe", "topic": HEALTHY_TOPIC, "type": "std_msgs/msg/Int64"})
+        )
+        await pub.send(
+            json.dumps({"op": "advertise", "topic": HEALTHY_TOPIC, "type": "std_msgs/msg/Int64"})
+        )
         await asyncio.sleep(0.3)
 
         async def listen() -> None:
@@ -74,8 +76,9 @@ async def healthy(url: str, stop: asyncio.Event) -> tuple[int, set[int]]:
         listener = asyncio.create_task(listen())
         published = 0
         while not stop.is_set():
-            await pub.send(json.dumps({"op": "publish", "topic": HEALTHY_TOPIC,
-                                       "msg": {"data": published}}))
+            await pub.send(
+                json.dumps({"op": "publish", "topic": HEALTHY_TOPIC, "msg": {"data": published}})
+            )
             published += 1
             await asyncio.sleep(HEALTHY_PERIOD_S)
         deadline = time.monotonic() + 10
@@ -104,7 +107,8 @@ def test_ten_thousand_hostile_frames_break_nothing_and_lose_nothing():
             assert page.status == 200
         log = bridge.text()
     assert published > 50 and received == set(range(published)), (
-        f"healthy subscriber lost {published - len(received)} of {published}")
+        f"healthy subscriber lost {published - len(received)} of {published}"
+    )
     assert all(code == 1009 for code in close_codes), close_codes  # fragment limit only
     assert "Traceback" not in log
     error_lines = [line for line in log.splitlines() if " ERROR " in line]
@@ -137,55 +141,84 @@ async def test_one_clients_odd_names_break_nothing_for_others(registry):
     async with run_bridge(BridgeConfig(port=0), registry) as bridge:
         url = bridge.url
         async with websockets.connect(url) as bad, websockets.connect(url) as good:
-            await bad.send('{"op":"call_service","service":"/rosapi/set_param","id":"p",'
-                           '"args":{"name":"\\ud800","value":"1"}}')
+            await bad.send(
+                '{"op":"call_service","service":"/rosapi/set_param","id":"p",'
+                '"args":{"name":"\\ud800","value":"1"}}'
+            )
             await bad.send('{"op":"advertise","topic":"/poison\\ud800","type":"std_msgs/String"}')
             await bad.send('{"op":"advertise_service","service":"/p","type":"std_srvs/Trigger"}')
-            names = await answer(good, {"op": "call_service", "id": "n",
-                                        "service": "/rosapi/get_param_names"}, "n")
-            topics = await answer(good, {"op": "call_service", "id": "t",
-                                         "service": "/rosapi/topics"}, "t")
+            names = await answer(
+                good, {"op": "call_service", "id": "n", "service": "/rosapi/get_param_names"}, "n"
+            )
+            topics = await answer(
+                good, {"op": "call_service", "id": "t", "service": "/rosapi/topics"}, "t"
+            )
             assert names["result"] and topics["result"]
             page = await asyncio.to_thread(
-                urllib.request.urlopen, f"http://127.0.0.1:{bridge.port}/metrics", timeout=10)
+                urllib.request.urlopen, f"http://127.0.0.1:{bridge.port}/metrics", timeout=10
+            )
             assert page.status == 200
             await good.send(json.dumps({"op": "call_service", "service": "/p", "id": "c"}))
             request = json.loads(await asyncio.wait_for(bad.recv(), 10))
             while request.get("op") != "call_service":
                 request = json.loads(await asyncio.wait_for(bad.recv(), 10))
-            await bad.send('{"op":"service_response","service":"/p","result":true,"id":'
-                           + json.dumps(request["id"]) + ',"values":{"message":"\\ud800"}}')
+            await bad.send(
+                '{"op":"service_response","service":"/p","result":true,"id":'
+                + json.dumps(request["id"])
+                + ',"values":{"message":"\\ud800"}}'
+            )
             failed = json.loads(await asyncio.wait_for(good.recv(), 10))
             assert (failed["id"], failed["result"]) == ("c", False)
 
 
 @pytest.mark.timeout(60)
-@pytest.mark.parametrize(("op", "bytes_in"), [
-    ({"op": "call_service", "service": "/" + "é" * 250_000, "id": "a", "fragment_size": 1},
-     250_000),
-    ({"op": "call_service", "service": "/nope", "id": "i" * 1_000_000, "fragment_size": 1000},
-     1_000_000),
-])
+@pytest.mark.parametrize(
+    ("op", "bytes_in"),
+    [
+        (
+            {"op": "call_service", "service": "/" + "é" * 250_000, "id": "a", "fragment_size": 1},
+            250_000,
+        ),
+        (
+            {
+                "op": "call_service",
+                "service": "/nope",
+                "id": "i" * 1_000_000,
+                "fragment_size": 1000,
+            },
+            1_000_000,
+        ),
+    ],
+)
 async def test_replies_are_never_much_larger_than_their_request(registry, op, bytes_in):
-    async with (run_bridge(BridgeConfig(port=0), registry) as bridge,
-                websockets.connect(bridge.url, max_size=None) as ws):
+    async with (
+        run_bridge(BridgeConfig(port=0), registry) as bridge,
+        websockets.connect(bridge.url, max_size=None) as ws,
+    ):
         await ws.send(json.dumps(op))
         frames, bytes_out = await received_bytes(ws)
     assert 1 <= frames <= 10 and bytes_out < 10_000 < bytes_in
 
 
 @pytest.mark.timeout(60)
-async def test_a_client_that_asks_without_reading_is_closed_past_its_reply_budget(
-        registry, caplog):
+async def test_a_client_that_asks_without_reading_is_closed_past_its_reply_budget(registry, caplog):
     """90-byte questions with ~100 kB answers, never read: closed at the budget (1008)."""
     config = BridgeConfig(port=0, reply_budget_bytes=2 * 1024 * 1024)
     async with run_bridge(config, registry) as bridge, websockets.connect(bridge.url) as good:
         async with websockets.connect(bridge.url, max_queue=1) as greedy:
             for index in range(40):  # every full definition makes the answer larger
-                await greedy.send(json.dumps({"op": "advertise", "topic": f"/m{index}",
-                                              "type": "visualization_msgs/msg/MarkerArray"}))
-            question = json.dumps({"op": "call_service", "id": "q",
-                                   "service": "/rosapi/topics_and_raw_types"})
+                await greedy.send(
+                    json.dumps(
+                        {
+                            "op": "advertise",
+                            "topic": f"/m{index}",
+                            "type": "visualization_msgs/msg/MarkerArray",
+                        }
+                    )
+                )
+            question = json.dumps(
+                {"op": "call_service", "id": "q", "service": "/rosapi/topics_and_raw_types"}
+            )
             with contextlib.suppress(ConnectionClosed):
                 for _ in range(2000):
                     await greedy.send(question)
@@ -196,6 +229,7 @@ async def test_a_client_that_asks_without_reading_is_closed_past_its_reply_budge
                 assert time.monotonic() < deadline, "the greedy client is still connected"
                 await asyncio.sleep(0.05)
         assert "MiB of replies unread (limit 2 MiB)" in caplog.text
-        reply = await answer(good, {"op": "call_service", "id": "g",
-                                    "service": "/rosapi/get_time"}, "g")
+        reply = await answer(
+            good, {"op": "call_service", "id": "g", "service": "/rosapi/get_time"}, "g"
+        )
         assert reply["result"] is True

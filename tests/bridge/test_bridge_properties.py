@@ -28,24 +28,57 @@ VALID_OPS = [
     {"op": "advertise", "topic": "/a", "type": "std_msgs/String", "id": "ad", "latch": True},
     {"op": "unadvertise", "topic": "/a", "id": "ad"},
     {"op": "publish", "topic": "/a", "msg": {"data": "x"}},
-    {"op": "publish", "topic": "/imu", "type": "sensor_msgs/Imu",
-     "msg": {"orientation_covariance": [0.0] * 9}},
-    {"op": "subscribe", "topic": "/a", "type": "std_msgs/String", "id": "s",
-     "throttle_rate": 10, "queue_length": 2, "compression": "cbor", "fragment_size": 8},
+    {
+        "op": "publish",
+        "topic": "/imu",
+        "type": "sensor_msgs/Imu",
+        "msg": {"orientation_covariance": [0.0] * 9},
+    },
+    {
+        "op": "subscribe",
+        "topic": "/a",
+        "type": "std_msgs/String",
+        "id": "s",
+        "throttle_rate": 10,
+        "queue_length": 2,
+        "compression": "cbor",
+        "fragment_size": 8,
+    },
     {"op": "unsubscribe", "topic": "/a", "id": "s"},
     {"op": "call_service", "service": "/rosapi/topics", "id": 1, "args": {}},
     {"op": "call_service", "service": "/svc", "id": 2, "args": [True], "timeout": 0.5},
     {"op": "advertise_service", "service": "/svc", "type": "std_srvs/SetBool"},
     {"op": "unadvertise_service", "service": "/svc"},
-    {"op": "service_response", "service": "/svc", "id": "service_request:/svc:1",
-     "values": {"success": True}, "result": True},
+    {
+        "op": "service_response",
+        "service": "/svc",
+        "id": "service_request:/svc:1",
+        "values": {"success": True},
+        "result": True,
+    },
     {"op": "advertise_action", "action": "/act", "type": "example_interfaces/Fibonacci"},
-    {"op": "send_action_goal", "action": "/act", "action_type": "example_interfaces/Fibonacci",
-     "args": {"order": 3}, "id": "g", "feedback": True},
-    {"op": "action_feedback", "action": "/act", "id": "action_goal:/act:1",
-     "values": {"sequence": [0]}},
-    {"op": "action_result", "action": "/act", "id": "action_goal:/act:1",
-     "values": {"sequence": [0, 1]}, "status": 4, "result": True},
+    {
+        "op": "send_action_goal",
+        "action": "/act",
+        "action_type": "example_interfaces/Fibonacci",
+        "args": {"order": 3},
+        "id": "g",
+        "feedback": True,
+    },
+    {
+        "op": "action_feedback",
+        "action": "/act",
+        "id": "action_goal:/act:1",
+        "values": {"sequence": [0]},
+    },
+    {
+        "op": "action_result",
+        "action": "/act",
+        "id": "action_goal:/act:1",
+        "values": {"sequence": [0, 1]},
+        "status": 4,
+        "result": True,
+    },
     {"op": "cancel_action_goal", "action": "/act", "id": "g"},
     {"op": "fragment", "id": "f", "num": 0, "total": 2, "data": '{"op":"set_'},
     {"op": "fragment", "id": "f", "num": 1, "total": 2, "data": 'level","level":"info"}'},
@@ -54,8 +87,9 @@ VALID_OPS = [
 
 json_values = st.recursive(
     st.none() | st.booleans() | st.integers() | st.floats() | st.text(max_size=8),
-    lambda children: st.lists(children, max_size=4)
-    | st.dictionaries(st.text(max_size=6), children, max_size=4),
+    lambda children: (
+        st.lists(children, max_size=4) | st.dictionaries(st.text(max_size=6), children, max_size=4)
+    ),
     max_leaves=12,
 )
 
@@ -93,17 +127,29 @@ def frames(draw) -> bytes | str:
 hostile_scalars = (
     st.sampled_from(["\ud800", "ok\udfff", "\udc00\ud800"])
     | st.text(st.characters(codec=None, categories=["Cs", "L", "Nd", "Cc"]), max_size=6)
-    | st.integers() | st.sampled_from([2**64, -(2**63) - 1, 2**100, 10**30])
-    | st.floats() | st.none() | st.booleans()
+    | st.integers()
+    | st.sampled_from([2**64, -(2**63) - 1, 2**100, 10**30])
+    | st.floats()
+    | st.none()
+    | st.booleans()
 )
 hostile_values = st.recursive(
     hostile_scalars,
-    lambda children: st.lists(children, max_size=4)
-    | st.dictionaries(st.text(max_size=6), children, max_size=4),
+    lambda children: (
+        st.lists(children, max_size=4) | st.dictionaries(st.text(max_size=6), children, max_size=4)
+    ),
     max_leaves=12,
 )
-cbor_only = st.sampled_from([cbor2.undefined, frozenset({1, 2}), cbor2.CBORTag(999, 1),
-                             cbor2.CBORSimpleValue(99), {1: "x"}, 10**400])
+cbor_only = st.sampled_from(
+    [
+        cbor2.undefined,
+        frozenset({1, 2}),
+        cbor2.CBORTag(999, 1),
+        cbor2.CBORSimpleValue(99),
+        {1: "x"},
+        10**400,
+    ]
+)
 
 
 def encode_hostile(op: dict, as_cbor: bool) -> bytes | str:
@@ -134,8 +180,16 @@ PAYLOAD_OPS = [
     ({"op": "publish", "topic": "/a"}, "msg"),
     ({"op": "call_service", "service": "/untyped", "id": 5}, "args"),
     ({"op": "call_service", "service": "/svc", "id": 6}, "args"),
-    ({"op": "send_action_goal", "action": "/act", "id": "g", "feedback": True,
-      "action_type": "example_interfaces/Fibonacci"}, "args"),
+    (
+        {
+            "op": "send_action_goal",
+            "action": "/act",
+            "id": "g",
+            "feedback": True,
+            "action_type": "example_interfaces/Fibonacci",
+        },
+        "args",
+    ),
     ({"op": "advertise", "topic": "/b", "type": "std_msgs/String"}, "id"),
 ]
 
@@ -150,16 +204,23 @@ def hostile_frames(draw) -> bytes | str:
         key = draw(st.sampled_from(["data", "order", "x"]))
         return encode_hostile({**base, payload: {key: draw(values)}}, as_cbor)
     op = dict(draw(st.sampled_from([*VALID_OPS, UNTYPED_CALL])))
-    keys = [*(k for k in op if k != "op"), "id", "msg", "args", "values", "fragment_size",
-            "timeout", "total"]
+    keys = [
+        *(k for k in op if k != "op"),
+        "id",
+        "msg",
+        "args",
+        "values",
+        "fragment_size",
+        "timeout",
+        "total",
+    ]
     for key in draw(st.lists(st.sampled_from(keys), min_size=1, max_size=3)):
         op[key] = draw(values)
     return encode_hostile(op, as_cbor)
 
 
 @settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-@given(script=st.lists(st.tuples(st.integers(0, 2), hostile_frames(), st.booleans()),
-                       max_size=20))
+@given(script=st.lists(st.tuples(st.integers(0, 2), hostile_frames(), st.booleans()), max_size=20))
 def test_hostile_values_get_answers_that_can_be_sent_and_one_short_line(registry, script):
     records: list[logging.LogRecord] = []
     handler = logging.Handler()
@@ -205,8 +266,11 @@ def assert_nothing_left(h: CoreHarness) -> None:
 
 
 @settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-@given(script=st.lists(st.tuples(st.integers(0, 2), frames(), st.floats(0, 1), st.booleans()),
-                       max_size=25))
+@given(
+    script=st.lists(
+        st.tuples(st.integers(0, 2), frames(), st.floats(0, 1), st.booleans()), max_size=25
+    )
+)
 def test_core_survives_any_frames_and_leaks_nothing(registry, script):
     h = CoreHarness(registry, offload_threshold_bytes=1)  # off_loop: every check offloaded
     clients = [h.connect() for _ in range(3)]
@@ -261,8 +325,11 @@ def is_end(frame: bytes | str) -> bool:
 
 
 @pytest.mark.timeout(120)
-@settings(max_examples=40, deadline=None, suppress_health_check=[
-    HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
+@settings(
+    max_examples=40,
+    deadline=None,
+    suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow],
+)
 @given(batch=st.lists(frames(), min_size=1, max_size=20))
 def test_live_server_keeps_serving_others_whatever_one_client_sends(live_bridge, batch):
     with connect(live_bridge) as pub, connect(live_bridge) as sub:
@@ -271,8 +338,16 @@ def test_live_server_keeps_serving_others_whatever_one_client_sends(live_bridge,
             for frame in batch:
                 vandal.send(frame)
             # fragment_size null undoes any fragmentation the batch may have switched on.
-            vandal.send(json.dumps({"op": "call_service", "service": "/rosapi/get_time",
-                                    "id": "end", "fragment_size": None}))
+            vandal.send(
+                json.dumps(
+                    {
+                        "op": "call_service",
+                        "service": "/rosapi/get_time",
+                        "id": "end",
+                        "fragment_size": None,
+                    }
+                )
+            )
             while not is_end(vandal.recv(timeout=10)):
                 pass
         pub.send(json.dumps({"op": "publish", "topic": "/probe", "msg": {"data": "alive"}}))

@@ -64,8 +64,12 @@ def test_answers_are_never_dropped_and_never_push_out_a_message():
 
 def test_a_busy_stream_is_skipped_and_keeps_its_place():
     queue = SendQueue(1000)
-    for label, topic in [("scan1", "/scan"), ("imu1", "/imu"), ("scan2", "/scan"),
-                         ("imu2", "/imu")]:
+    for label, topic in [
+        ("scan1", "/scan"),
+        ("imu1", "/imu"),
+        ("scan2", "/scan"),
+        ("imu2", "/imu"),
+    ]:
         queue.push(item(label, topic), 10)
     assert labels(queue, busy=("/scan",)) == ["imu1", "imu2"]
     first = queue.pop()

@@ -38,8 +38,14 @@ def imu(registry: TypeRegistry, seq: int = 0) -> dict[str, Any]:
     return msg
 
 
-async def publish_until_received(publisher: RosbridgeClient, topic: str, msg: dict[str, Any],
-                                 sub: Subscription, *, timeout_s: float = 10.0) -> Received:
+async def publish_until_received(
+    publisher: RosbridgeClient,
+    topic: str,
+    msg: dict[str, Any],
+    sub: Subscription,
+    *,
+    timeout_s: float = 10.0,
+) -> Received:
     """Publish ``msg`` every 50 ms until ``sub`` receives something (subscribe has no ack)."""
     async with asyncio.timeout(timeout_s):
         while True:
@@ -53,10 +59,14 @@ async def publish_until_received(publisher: RosbridgeClient, topic: str, msg: di
 def rosbridge_fragments(text: str, size: int, frag_id=0) -> list[str]:
     """Fragments exactly as rosbridge cuts them, including its float ``total``."""
     total = (len(text) - 1) / size + 1
-    pieces = [text[i:i + size] for i in range(0, len(text), size)]
+    pieces = [text[i : i + size] for i in range(0, len(text), size)]
     assert math.floor(total) == len(pieces)
-    return [orjson.dumps({"op": "fragment", "id": frag_id, "data": piece, "num": num,
-                          "total": total}).decode() for num, piece in enumerate(pieces)]
+    return [
+        orjson.dumps(
+            {"op": "fragment", "id": frag_id, "data": piece, "num": num, "total": total}
+        ).decode()
+        for num, piece in enumerate(pieces)
+    ]
 
 
 def rosbridge_png(text: str) -> str:
@@ -72,8 +82,13 @@ def rosbridge_png(text: str) -> str:
 
 
 def publish_text(topic: str, payload: bytes) -> str:
-    msg = {"header": {"stamp": {"sec": 1, "nanosec": 2}, "frame_id": "lidar"},
-           "height": 1, "width": len(payload) // 16, "point_step": 16,
-           "row_step": len(payload), "data": base64.b64encode(payload).decode(),
-           "is_dense": True}
+    msg = {
+        "header": {"stamp": {"sec": 1, "nanosec": 2}, "frame_id": "lidar"},
+        "height": 1,
+        "width": len(payload) // 16,
+        "point_step": 16,
+        "row_step": len(payload),
+        "data": base64.b64encode(payload).decode(),
+        "is_dense": True,
+    }
     return orjson.dumps({"op": "publish", "topic": topic, "msg": msg}).decode()

@@ -22,7 +22,8 @@ async def bridge() -> AsyncIterator[Any]:
 
 @pytest.fixture
 async def make_client(
-        registry: TypeRegistry) -> AsyncIterator[Callable[..., Awaitable[RosbridgeClient]]]:
+    registry: TypeRegistry,
+) -> AsyncIterator[Callable[..., Awaitable[RosbridgeClient]]]:
     """Connects clients (shared type registry) and closes them all at teardown."""
     made: list[RosbridgeClient] = []
 

@@ -40,17 +40,30 @@ def test_protocol_routes_goals_and_cancels_for_advertised_actions():
     proto = ClientProtocol(encoding="json", spec_lookup=lambda name: None)
     frame = proto.advertise_action("/fib", FIB)
     assert orjson.loads(frame.data) == {"op": "advertise_action", "type": FIB, "action": "/fib"}
-    request = {"op": "send_action_goal", "id": "action_goal:/fib:1", "action": "/fib",
-               "action_type": FIB, "args": {"order": 3}, "feedback": True}
+    request = {
+        "op": "send_action_goal",
+        "id": "action_goal:/fib:1",
+        "action": "/fib",
+        "action_type": FIB,
+        "args": {"order": 3},
+        "feedback": True,
+    }
     [goal] = proto.receive(orjson.dumps(request).decode(), recv_ns=0)
     assert goal == GoalRequest("action_goal:/fib:1", "/fib", FIB, {"order": 3})
     cancel = {"op": "cancel_action_goal", "id": "action_goal:/fib:1", "action": "/fib"}
     assert proto.receive(orjson.dumps(cancel).decode(), recv_ns=0) == [
-        GoalCancel("action_goal:/fib:1", "/fib")]
-    assert orjson.loads(ClientProtocol.action_result(goal, {"sequence": [0, 1]}, status=4,
-                                                     result=True).data) == {
-        "op": "action_result", "id": "action_goal:/fib:1", "action": "/fib",
-        "values": {"sequence": [0, 1]}, "status": 4, "result": True}
+        GoalCancel("action_goal:/fib:1", "/fib")
+    ]
+    assert orjson.loads(
+        ClientProtocol.action_result(goal, {"sequence": [0, 1]}, status=4, result=True).data
+    ) == {
+        "op": "action_result",
+        "id": "action_goal:/fib:1",
+        "action": "/fib",
+        "values": {"sequence": [0, 1]},
+        "status": 4,
+        "result": True,
+    }
     assert [orjson.loads(f.data)["op"] for f in proto.resume_frames()] == ["advertise_action"]
     proto.unadvertise_action("/fib")
     [ignored] = proto.receive(orjson.dumps(request).decode(), recv_ns=0)

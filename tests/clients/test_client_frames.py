@@ -37,8 +37,15 @@ def test_fragmented_publish_reassembles_in_num_order(proto):
 
 def test_fragmented_service_response_uses_its_id(proto):
     call_id, _ = proto.call_service("/big")
-    text = orjson.dumps({"op": "service_response", "id": call_id, "service": "/big",
-                         "values": {"blob": "x" * 300}, "result": True}).decode()
+    text = orjson.dumps(
+        {
+            "op": "service_response",
+            "id": call_id,
+            "service": "/big",
+            "values": {"blob": "x" * 300},
+            "result": True,
+        }
+    ).decode()
     events = []
     for frame in rosbridge_fragments(text, size=64, frag_id=call_id):
         events += proto.receive(frame, recv_ns=0)
@@ -47,10 +54,8 @@ def test_fragmented_service_response_uses_its_id(proto):
 
 def test_interleaved_fragment_ids_are_kept_apart():
     assembler = FragmentAssembler()
-    a = [orjson.loads(f) for f in rosbridge_fragments('{"op":"a","x":"' + "a" * 40 + '"}', 20,
-                                                      "A")]
-    b = [orjson.loads(f) for f in rosbridge_fragments('{"op":"b","x":"' + "b" * 40 + '"}', 20,
-                                                      "B")]
+    a = [orjson.loads(f) for f in rosbridge_fragments('{"op":"a","x":"' + "a" * 40 + '"}', 20, "A")]
+    b = [orjson.loads(f) for f in rosbridge_fragments('{"op":"b","x":"' + "b" * 40 + '"}', 20, "B")]
     done = [assembler.add(op, 1) for pair in zip(a, b, strict=True) for op in pair]
     texts = [d.text for d in done if d is not None]
     assert [orjson.loads(t)["op"] for t in texts] == ["a", "b"]
@@ -74,12 +79,15 @@ def test_partial_messages_are_bounded():
     assert assembler.pending == 2 and assembler.discarded == 3
 
 
-@pytest.mark.parametrize("bad", [
-    {"op": "fragment", "id": 0, "num": 0, "data": "x"},
-    {"op": "fragment", "id": 0, "num": 5, "total": 2, "data": "x"},
-    {"op": "fragment", "id": 0, "num": 0, "total": "2", "data": "x"},
-    {"op": "fragment", "id": 0, "num": 0, "total": 2, "data": 3},
-])
+@pytest.mark.parametrize(
+    "bad",
+    [
+        {"op": "fragment", "id": 0, "num": 0, "data": "x"},
+        {"op": "fragment", "id": 0, "num": 5, "total": 2, "data": "x"},
+        {"op": "fragment", "id": 0, "num": 0, "total": "2", "data": "x"},
+        {"op": "fragment", "id": 0, "num": 0, "total": 2, "data": 3},
+    ],
+)
 def test_malformed_fragments_raise(proto, bad):
     with pytest.raises(ProtocolError):
         proto.receive(orjson.dumps(bad).decode(), recv_ns=0)
@@ -95,8 +103,11 @@ def test_png_publish_is_decoded(proto):
 
 def test_fragmented_png_is_decoded(proto):
     proto.subscribe("/chatter", "std_msgs/msg/String")
-    png_text = rosbridge_png(orjson.dumps({"op": "publish", "topic": "/chatter",
-                                           "msg": {"data": "hello " * 50}}).decode()).decode()
+    png_text = rosbridge_png(
+        orjson.dumps(
+            {"op": "publish", "topic": "/chatter", "msg": {"data": "hello " * 50}}
+        ).decode()
+    ).decode()
     events = []
     for frame in rosbridge_fragments(png_text, size=100):
         events += proto.receive(frame, recv_ns=0)

@@ -46,8 +46,14 @@ def item(n: int) -> Received:
 
 
 async def test_subscription_drops_oldest_and_counts():
-    sub = Subscription(topic="/t", sub_id="subscribe:/t:1", type=None, maxsize=3,
-                       bytes_as_numpy=False, unsubscribe=_noop_unsubscribe)
+    sub = Subscription(
+        topic="/t",
+        sub_id="subscribe:/t:1",
+        type=None,
+        maxsize=3,
+        bytes_as_numpy=False,
+        unsubscribe=_noop_unsubscribe,
+    )
     for n in range(10):
         sub.deliver(item(n))
     assert (sub.received, sub.dropped, sub.qsize()) == (10, 7, 3)
@@ -60,8 +66,9 @@ async def test_subscription_iteration_waits_then_ends_on_unsubscribe():
     async def record(sub: Subscription) -> None:
         calls.append(sub.id)
 
-    sub = Subscription(topic="/t", sub_id="s1", type=None, maxsize=4, bytes_as_numpy=False,
-                       unsubscribe=record)
+    sub = Subscription(
+        topic="/t", sub_id="s1", type=None, maxsize=4, bytes_as_numpy=False, unsubscribe=record
+    )
 
     async def consume() -> list[int]:
         return [r.msg["n"] async for r in sub]
@@ -80,15 +87,27 @@ async def test_subscription_iteration_waits_then_ends_on_unsubscribe():
 
 
 async def test_subscription_raises_connection_loss_after_draining():
-    sub = Subscription(topic="/t", sub_id="s1", type=None, maxsize=4, bytes_as_numpy=False,
-                       unsubscribe=_noop_unsubscribe)
+    sub = Subscription(
+        topic="/t",
+        sub_id="s1",
+        type=None,
+        maxsize=4,
+        bytes_as_numpy=False,
+        unsubscribe=_noop_unsubscribe,
+    )
     sub.deliver(item(1))
     sub.finish(ConnectionClosed("gone"))
     assert (await sub.get()).msg["n"] == 1
     with pytest.raises(ConnectionClosed):
         await sub.get()
-    sub2 = Subscription(topic="/t", sub_id="s2", type=None, maxsize=4, bytes_as_numpy=False,
-                        unsubscribe=_noop_unsubscribe)
+    sub2 = Subscription(
+        topic="/t",
+        sub_id="s2",
+        type=None,
+        maxsize=4,
+        bytes_as_numpy=False,
+        unsubscribe=_noop_unsubscribe,
+    )
     sub2.finish(ClientClosed("closed"))
     assert [r async for r in sub2] == []
 
@@ -106,9 +125,13 @@ def test_bytes_as_arrays_gives_zero_copy_views():
 
 
 def test_payload_bytes_counts_arrays_not_structure():
-    msg = {"data": b"x" * 1000, "points": np.zeros((10, 4), np.float32),
-           "header": {"frame_id": "abc"}, "covariance": [0.0] * 9,
-           "markers": [{"blob": b"y" * 5}]}
+    msg = {
+        "data": b"x" * 1000,
+        "points": np.zeros((10, 4), np.float32),
+        "header": {"frame_id": "abc"},
+        "covariance": [0.0] * 9,
+        "markers": [{"blob": b"y" * 5}],
+    }
     assert payload_bytes(msg) == 1000 + 160 + 3 + 5
 
 

@@ -42,18 +42,28 @@ def op_of(frame) -> dict:
 def test_subscribe_frame_carries_roslibpy_style_id_and_defaults(json_proto):
     sub_id, frame = json_proto.subscribe("/imu", "sensor_msgs/msg/Imu")
     assert sub_id == "subscribe:/imu:1"
-    assert op_of(frame) == {"op": "subscribe", "id": "subscribe:/imu:1", "topic": "/imu",
-                            "type": "sensor_msgs/msg/Imu", "compression": "none",
-                            "throttle_rate": 0, "queue_length": 0}
+    assert op_of(frame) == {
+        "op": "subscribe",
+        "id": "subscribe:/imu:1",
+        "topic": "/imu",
+        "type": "sensor_msgs/msg/Imu",
+        "compression": "none",
+        "throttle_rate": 0,
+        "queue_length": 0,
+    }
 
 
 def test_default_compression_follows_encoding(cbor_proto, json_proto):
     assert op_of(cbor_proto.subscribe("/t")[1])["compression"] == "cbor"
     assert op_of(json_proto.subscribe("/t")[1])["compression"] == "none"
-    explicit = op_of(cbor_proto.subscribe("/t", compression="png", throttle_rate_ms=50,
-                                          queue_length=2)[1])
+    explicit = op_of(
+        cbor_proto.subscribe("/t", compression="png", throttle_rate_ms=50, queue_length=2)[1]
+    )
     assert (explicit["compression"], explicit["throttle_rate"], explicit["queue_length"]) == (
-        "png", 50, 2)
+        "png",
+        50,
+        2,
+    )
     assert "type" not in explicit
 
 
@@ -64,7 +74,10 @@ def test_ids_count_up_across_ops(json_proto):
     goal_id, _ = json_proto.send_action_goal("/act", "example_interfaces/action/Fibonacci")
     assert json_proto.advertisements["/a"].advert_id == "advertise:/a:1"
     assert (sub_id, call_id, goal_id) == (
-        "subscribe:/b:2", "call_service:/s:3", "send_action_goal:/act:4")
+        "subscribe:/b:2",
+        "call_service:/s:3",
+        "send_action_goal:/act:4",
+    )
 
 
 def test_subscribe_unknown_type_raises_before_sending(json_proto):
@@ -75,10 +88,18 @@ def test_subscribe_unknown_type_raises_before_sending(json_proto):
 
 def test_advertise_unadvertise_frames(json_proto):
     assert op_of(json_proto.advertise("/cmd", "geometry_msgs/Twist", latch=True)) == {
-        "op": "advertise", "id": "advertise:/cmd:1", "type": "geometry_msgs/Twist",
-        "topic": "/cmd", "latch": True, "queue_size": 100}
+        "op": "advertise",
+        "id": "advertise:/cmd:1",
+        "type": "geometry_msgs/Twist",
+        "topic": "/cmd",
+        "latch": True,
+        "queue_size": 100,
+    }
     assert op_of(json_proto.unadvertise("/cmd")) == {
-        "op": "unadvertise", "id": "advertise:/cmd:1", "topic": "/cmd"}
+        "op": "unadvertise",
+        "id": "advertise:/cmd:1",
+        "topic": "/cmd",
+    }
     assert json_proto.unadvertise("/cmd") is None
 
 
@@ -96,10 +117,21 @@ def test_publish_encoding_per_connection(json_proto, cbor_proto):
 
 def test_call_service_frame_and_reply_routing(json_proto):
     call_id, frame = json_proto.call_service("/add", {"a": 1}, type="x/srv/Add", timeout_s=2)
-    assert op_of(frame) == {"op": "call_service", "id": call_id, "service": "/add",
-                            "args": {"a": 1}, "type": "x/srv/Add", "timeout": 2.0}
-    reply = {"op": "service_response", "id": call_id, "service": "/add",
-             "values": {"sum": 3}, "result": True}
+    assert op_of(frame) == {
+        "op": "call_service",
+        "id": call_id,
+        "service": "/add",
+        "args": {"a": 1},
+        "type": "x/srv/Add",
+        "timeout": 2.0,
+    }
+    reply = {
+        "op": "service_response",
+        "id": call_id,
+        "service": "/add",
+        "values": {"sum": 3},
+        "result": True,
+    }
     [event] = json_proto.receive(orjson.dumps(reply).decode(), recv_ns=NOW_NS)
     assert event == ServiceReply(call_id, "/add", True, {"sum": 3})
     [late] = json_proto.receive(orjson.dumps(reply).decode(), recv_ns=NOW_NS)
@@ -108,8 +140,15 @@ def test_call_service_frame_and_reply_routing(json_proto):
 
 def test_failed_service_reply_keeps_error_text(json_proto):
     call_id, _ = json_proto.call_service("/missing")
-    text = orjson.dumps({"op": "service_response", "id": call_id, "service": "/missing",
-                         "values": "Service /missing does not exist", "result": False})
+    text = orjson.dumps(
+        {
+            "op": "service_response",
+            "id": call_id,
+            "service": "/missing",
+            "values": "Service /missing does not exist",
+            "result": False,
+        }
+    )
     [event] = json_proto.receive(text.decode(), recv_ns=NOW_NS)
     assert event.result is False and event.values == "Service /missing does not exist"
 
@@ -150,9 +189,15 @@ def test_topic_names_are_matched_exactly(json_proto):
 def test_typed_json_publish_is_normalized(json_proto):
     json_proto.subscribe("/cloud", "sensor_msgs/msg/PointCloud2")
     payload = bytes(range(256)) * 4
-    text = publish_json("/cloud", {"height": 1, "width": 64, "data": payload,
-                                   "header": {"frame_id": "lidar", "stamp": {"secs": 5,
-                                                                              "nsecs": 7}}})
+    text = publish_json(
+        "/cloud",
+        {
+            "height": 1,
+            "width": 64,
+            "data": payload,
+            "header": {"frame_id": "lidar", "stamp": {"secs": 5, "nsecs": 7}},
+        },
+    )
     [event] = json_proto.receive(text.decode(), recv_ns=NOW_NS)
     msg = event.received.msg
     assert msg["data"] == payload
@@ -163,8 +208,10 @@ def test_typed_json_publish_is_normalized(json_proto):
 def test_typed_cbor_publish_is_normalized(cbor_proto):
     cbor_proto.subscribe("/imu", "sensor_msgs/Imu")
     cov = [float(i) for i in range(9)]
-    frame = publish_cbor("/imu", {"orientation_covariance": cov,
-                                  "linear_acceleration": {"x": 0.5, "y": 0.0, "z": 9.81}})
+    frame = publish_cbor(
+        "/imu",
+        {"orientation_covariance": cov, "linear_acceleration": {"x": 0.5, "y": 0.0, "z": 9.81}},
+    )
     [event] = cbor_proto.receive(frame, recv_ns=NOW_NS)
     msg = event.received.msg
     assert msg["orientation_covariance"] == cov
@@ -224,38 +271,68 @@ def test_unknown_and_status_ops_are_ignored(json_proto):
 
 def test_call_service_reaches_advertised_service_only(json_proto):
     frame = json_proto.advertise_service("/add", "example_interfaces/srv/AddTwoInts")
-    assert op_of(frame) == {"op": "advertise_service", "type":
-                            "example_interfaces/srv/AddTwoInts", "service": "/add"}
-    request = '{"op":"call_service","id":"service_request:/add:1","service":"/add",' \
-              '"args":{"a":1,"b":2}}'
+    assert op_of(frame) == {
+        "op": "advertise_service",
+        "type": "example_interfaces/srv/AddTwoInts",
+        "service": "/add",
+    }
+    request = (
+        '{"op":"call_service","id":"service_request:/add:1","service":"/add","args":{"a":1,"b":2}}'
+    )
     [event] = json_proto.receive(request, recv_ns=0)
     assert event == ServiceRequest("service_request:/add:1", "/add", {"a": 1, "b": 2})
     answer = op_of(ClientProtocol.service_response(event, {"sum": 3}, result=True))
-    assert answer == {"op": "service_response", "service": "/add", "values": {"sum": 3},
-                      "result": True, "id": "service_request:/add:1"}
+    assert answer == {
+        "op": "service_response",
+        "service": "/add",
+        "values": {"sum": 3},
+        "result": True,
+        "id": "service_request:/add:1",
+    }
     assert op_of(json_proto.unadvertise_service("/add")) == {
-        "op": "unadvertise_service", "service": "/add"}
+        "op": "unadvertise_service",
+        "service": "/add",
+    }
     [ignored] = json_proto.receive(request, recv_ns=0)
     assert isinstance(ignored, Ignored)
 
 
 def test_action_goal_feedback_result_and_cancel(json_proto):
-    goal_id, frame = json_proto.send_action_goal("/fib", "example_interfaces/action/Fibonacci",
-                                                 {"order": 4})
-    assert op_of(frame) == {"op": "send_action_goal", "id": goal_id, "action": "/fib",
-                            "action_type": "example_interfaces/action/Fibonacci",
-                            "args": {"order": 4}, "feedback": True}
+    goal_id, frame = json_proto.send_action_goal(
+        "/fib", "example_interfaces/action/Fibonacci", {"order": 4}
+    )
+    assert op_of(frame) == {
+        "op": "send_action_goal",
+        "id": goal_id,
+        "action": "/fib",
+        "action_type": "example_interfaces/action/Fibonacci",
+        "args": {"order": 4},
+        "feedback": True,
+    }
     assert op_of(json_proto.cancel_action_goal(goal_id)) == {
-        "op": "cancel_action_goal", "id": goal_id, "action": "/fib"}
-    feedback = orjson.dumps({"op": "action_feedback", "id": goal_id, "action": "/fib",
-                             "values": {"sequence": [0, 1]}}).decode()
+        "op": "cancel_action_goal",
+        "id": goal_id,
+        "action": "/fib",
+    }
+    feedback = orjson.dumps(
+        {"op": "action_feedback", "id": goal_id, "action": "/fib", "values": {"sequence": [0, 1]}}
+    ).decode()
     assert json_proto.receive(feedback, recv_ns=0) == [
-        ActionFeedback(goal_id, "/fib", {"sequence": [0, 1]})]
-    result = orjson.dumps({"op": "action_result", "id": goal_id, "action": "/fib",
-                           "values": {"sequence": [0, 1, 1, 2, 3]}, "status": 4,
-                           "result": True}).decode()
+        ActionFeedback(goal_id, "/fib", {"sequence": [0, 1]})
+    ]
+    result = orjson.dumps(
+        {
+            "op": "action_result",
+            "id": goal_id,
+            "action": "/fib",
+            "values": {"sequence": [0, 1, 1, 2, 3]},
+            "status": 4,
+            "result": True,
+        }
+    ).decode()
     assert json_proto.receive(result, recv_ns=0) == [
-        ActionOutcome(goal_id, "/fib", 4, True, {"sequence": [0, 1, 1, 2, 3]})]
+        ActionOutcome(goal_id, "/fib", 4, True, {"sequence": [0, 1, 1, 2, 3]})
+    ]
     assert json_proto.cancel_action_goal(goal_id) is None
 
 
@@ -292,8 +369,9 @@ def test_unknown_encoding_is_rejected(registry):
 
 def test_malformed_ops_raise_protocol_error(json_proto):
     goal_id, _ = json_proto.send_action_goal("/a", "pkg/action/A")
-    bad_status = orjson.dumps({"op": "action_result", "id": goal_id, "status": "done",
-                               "result": True}).decode()
+    bad_status = orjson.dumps(
+        {"op": "action_result", "id": goal_id, "status": "done", "result": True}
+    ).decode()
     for text in ('{"op":"publish","msg":{}}', '{"op":"call_service","id":"x"}', bad_status):
         with pytest.raises(ProtocolError):
             json_proto.receive(text, recv_ns=0)

@@ -13,15 +13,20 @@ from clients import ConnectionClosed, ConnectionFailed, RosbridgeClient
 ENCODINGS = ["json", "cbor"]
 
 
-@pytest.mark.parametrize(("encoding", "offload_bytes"),
-                         [("json", None), ("cbor", None), ("cbor", 64 * 1024)],
-                         ids=["json", "cbor", "cbor-worker-threads"])
-async def test_pointcloud_4mb_arrives_byte_identical(bridge, make_client, registry, encoding,
-                                                     offload_bytes):
-    publisher = await make_client(bridge.url, encoding=encoding, name="sim",
-                                  offload_bytes=offload_bytes)
-    subscriber = await make_client(bridge.url, encoding=encoding, name="nav",
-                                   offload_bytes=offload_bytes)
+@pytest.mark.parametrize(
+    ("encoding", "offload_bytes"),
+    [("json", None), ("cbor", None), ("cbor", 64 * 1024)],
+    ids=["json", "cbor", "cbor-worker-threads"],
+)
+async def test_pointcloud_4mb_arrives_byte_identical(
+    bridge, make_client, registry, encoding, offload_bytes
+):
+    publisher = await make_client(
+        bridge.url, encoding=encoding, name="sim", offload_bytes=offload_bytes
+    )
+    subscriber = await make_client(
+        bridge.url, encoding=encoding, name="nav", offload_bytes=offload_bytes
+    )
     await publisher.advertise("/lidar", "sensor_msgs/msg/PointCloud2")
     sub = await subscriber.subscribe("/lidar", "sensor_msgs/msg/PointCloud2")
     small = pointcloud(registry, 4)
@@ -49,8 +54,11 @@ async def test_imu_with_covariances(bridge, make_client, registry, encoding):
     sent = imu(registry)
     got = await publish_until_received(publisher, "/imu", sent, sub)
     assert got.topic == "/imu"
-    for key in ("orientation_covariance", "angular_velocity_covariance",
-                "linear_acceleration_covariance"):
+    for key in (
+        "orientation_covariance",
+        "angular_velocity_covariance",
+        "linear_acceleration_covariance",
+    ):
         assert got.msg[key] == pytest.approx(sent[key])
         assert isinstance(got.msg[key], list) and len(got.msg[key]) == 9
     assert got.msg["linear_acceleration"] == pytest.approx(sent["linear_acceleration"])
@@ -64,8 +72,9 @@ async def test_json_publisher_cbor_subscriber_interoperate(bridge, make_client, 
     await publisher.advertise("/scan", "sensor_msgs/msg/LaserScan")
     sub = await subscriber.subscribe("/scan", "sensor_msgs/msg/LaserScan")
     ranges = np.linspace(1.0, 50.0, 360, dtype=np.float32)
-    got = await publish_until_received(publisher, "/scan", {"ranges": ranges,
-                                                            "range_max": 80.0}, sub)
+    got = await publish_until_received(
+        publisher, "/scan", {"ranges": ranges, "range_max": 80.0}, sub
+    )
     assert got.msg["ranges"].dtype == np.float32
     np.testing.assert_array_equal(got.msg["ranges"], ranges)
 
@@ -78,8 +87,7 @@ async def test_untyped_subscription_and_numpy_views(bridge, make_client, registr
     cloud = pointcloud(registry, 1000)
     got = await publish_until_received(publisher, "/lidar", cloud, sub)
     points = got.msg["data"].view(np.float32).reshape(-1, 4)
-    np.testing.assert_array_equal(points, np.frombuffer(cloud["data"], np.float32)
-                                  .reshape(-1, 4))
+    np.testing.assert_array_equal(points, np.frombuffer(cloud["data"], np.float32).reshape(-1, 4))
 
 
 async def test_subscribe_before_the_publisher_exists(bridge, make_client, registry):
@@ -134,8 +142,7 @@ async def test_connect_times_out_without_a_bridge(unused_tcp_port):
     await client.close()
 
 
-async def test_registrations_made_before_connect_are_sent_on_connect(bridge, make_client,
-                                                                      registry):
+async def test_registrations_made_before_connect_are_sent_on_connect(bridge, make_client, registry):
     early = RosbridgeClient(bridge.url, registry=registry)
     sub = await early.subscribe("/early", "std_msgs/msg/String")
     await early.advertise("/early_out", "std_msgs/msg/String")
@@ -150,6 +157,7 @@ async def test_registrations_made_before_connect_are_sent_on_connect(bridge, mak
         listener = await make_client(bridge.url)
         echo = await listener.subscribe("/early_out", "std_msgs/msg/String")
         assert (await publish_until_received(early, "/early_out", {"data": "y"}, echo)).msg == {
-            "data": "y"}
+            "data": "y"
+        }
     finally:
         await early.close()

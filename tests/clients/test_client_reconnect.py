@@ -23,8 +23,9 @@ def port_of(url: str) -> int:
     return urlsplit(url).port
 
 
-async def call_when_available(client: RosbridgeClient, service: str, args: dict,
-                              timeout_s: float = 10.0) -> dict:
+async def call_when_available(
+    client: RosbridgeClient, service: str, args: dict, timeout_s: float = 10.0
+) -> dict:
     """Retry a call until the (re-)advertised service answers."""
     async with asyncio.timeout(timeout_s):
         while True:

@@ -30,8 +30,9 @@ async def test_client_provides_and_client_calls(bridge, make_client, encoding):
     await provider.advertise_service("/add", ADD, add_two_ints)
     await wait_for_service(caller, "/add")
     assert await caller.call_service("/add", {"a": 2, "b": 40}, type=ADD) == {"sum": 42}
-    results = await asyncio.gather(*(caller.call_service("/add", {"a": i, "b": i})
-                                     for i in range(10)))
+    results = await asyncio.gather(
+        *(caller.call_service("/add", {"a": i, "b": i}) for i in range(10))
+    )
     assert [r["sum"] for r in results] == [2 * i for i in range(10)]
 
 
@@ -46,8 +47,10 @@ async def test_handler_receives_normalized_args(bridge, make_client):
     caller = await make_client(bridge.url)
     await provider.advertise_service("/toggle", "std_srvs/srv/SetBool", handler)
     await wait_for_service(caller, "/toggle")
-    assert await caller.call_service("/toggle", {"data": True}) == {"success": True,
-                                                                     "message": "ok"}
+    assert await caller.call_service("/toggle", {"data": True}) == {
+        "success": True,
+        "message": "ok",
+    }
     assert seen == [{"data": True}]
 
 

@@ -40,15 +40,21 @@ class ScriptedServer:
 
 
 async def serve(server: ScriptedServer):
-    return await websockets.serve(server.handler, "127.0.0.1", 0, compression=None,
-                                  max_size=None)
+    return await websockets.serve(server.handler, "127.0.0.1", 0, compression=None, max_size=None)
 
 
 async def test_pump_survives_garbage_and_decodes_quirky_frames(registry):
     cloud = pointcloud(registry, 40_000)  # 640 kB: JSON over the offload threshold
-    big = orjson.dumps({"op": "publish", "topic": "/t", "msg": {
-        **{k: v for k, v in cloud.items() if k != "data"},
-        "data": base64.b64encode(cloud["data"]).decode()}}).decode()
+    big = orjson.dumps(
+        {
+            "op": "publish",
+            "topic": "/t",
+            "msg": {
+                **{k: v for k, v in cloud.items() if k != "data"},
+                "data": base64.b64encode(cloud["data"]).decode(),
+            },
+        }
+    ).decode()
     script = [
         "this is not json",
         publish_text("/t", b"\x01" * 32),
@@ -61,8 +67,9 @@ async def test_pump_survives_garbage_and_decodes_quirky_frames(registry):
     server = ScriptedServer(script)
     async with await serve(server) as ws_server:
         port = ws_server.sockets[0].getsockname()[1]
-        async with RosbridgeClient(f"ws://127.0.0.1:{port}", encoding="json",
-                                   registry=registry) as client:
+        async with RosbridgeClient(
+            f"ws://127.0.0.1:{port}", encoding="json", registry=registry
+        ) as client:
             sub = await client.subscribe("/t", "sensor_msgs/msg/PointCloud2")
             got = [await asyncio.wait_for(sub.get(), 5) for _ in range(5)]
             assert client.bad_frames == 2
@@ -78,8 +85,9 @@ async def test_resubscribes_with_the_same_id_after_an_abrupt_close(registry):
     server = ScriptedServer([publish_text("/t", b"\x05" * 16)], close_after_first=True)
     async with await serve(server) as ws_server:
         port = ws_server.sockets[0].getsockname()[1]
-        async with RosbridgeClient(f"ws://127.0.0.1:{port}", encoding="cbor",
-                                   registry=registry, backoff_max=0.2) as client:
+        async with RosbridgeClient(
+            f"ws://127.0.0.1:{port}", encoding="cbor", registry=registry, backoff_max=0.2
+        ) as client:
             await client.advertise("/out", "std_msgs/msg/String", latch=True)
             sub = await client.subscribe("/t", "sensor_msgs/msg/PointCloud2")
             first = await asyncio.wait_for(sub.get(), 5)

@@ -44,8 +44,9 @@ def roslibpy_with_auth(endpoint: BridgeEndpoint, secret: str) -> roslibpy.Ros:
     """A roslibpy connection that authenticates first, as `Ros.authenticate` does it."""
     op = rosauth.auth_op(secret, time.time(), client="192.168.1.101", dest="192.168.1.111")
     ros = roslibpy.Ros(endpoint.host, endpoint.port)
-    ros.authenticate(op["mac"], op["client"], op["dest"], op["rand"], op["t"], op["level"],
-                     op["end"])
+    ros.authenticate(
+        op["mac"], op["client"], op["dest"], op["rand"], op["t"], op["level"], op["end"]
+    )
     ros.run(timeout=rp.CONNECT_TIMEOUT_S)
     return ros
 
@@ -82,8 +83,17 @@ def test_roslibpy_with_a_wrong_secret_is_disconnected(secured_bridge):
 @pytest.mark.parametrize(("secret", "outcome"), [(SECRET, "success"), ("nope", "closed")])
 def test_roslibjs_authenticates(secured_bridge, secret, outcome):
     op = rosauth.auth_op(secret, time.time(), client="browser", dest="127.0.0.1")
-    result = run_scenario("auth.mjs", secured_bridge.url, op["mac"], op["client"], op["dest"],
-                          op["rand"], str(op["t"]), op["level"], str(op["end"]))
+    result = run_scenario(
+        "auth.mjs",
+        secured_bridge.url,
+        op["mac"],
+        op["client"],
+        op["dest"],
+        op["rand"],
+        str(op["t"]),
+        op["level"],
+        str(op["end"]),
+    )
     assert result["outcome"] == outcome, result
 
 
@@ -94,20 +104,21 @@ def certificate(tmp_path: Path) -> CertificatePair:
 
 async def get_time(url: str, **connect_options) -> dict:
     async with websockets.connect(url, **connect_options) as ws:
-        await ws.send(json.dumps({"op": "call_service", "service": "/rosapi/get_time",
-                                  "id": "t"}))
+        await ws.send(json.dumps({"op": "call_service", "service": "/rosapi/get_time", "id": "t"}))
         return json.loads(await asyncio.wait_for(ws.recv(), 20))
 
 
 def test_tls_serves_wss_and_https(certificate, monkeypatch):
     trust = ssl.create_default_context(cafile=str(certificate.certfile))
-    with running_bridge(["--certfile", str(certificate.certfile),
-                         "--keyfile", str(certificate.keyfile)]) as endpoint:
+    with running_bridge(
+        ["--certfile", str(certificate.certfile), "--keyfile", str(certificate.keyfile)]
+    ) as endpoint:
         assert f"listening on wss://127.0.0.1:{endpoint.port}" in endpoint.log.text()
         url = f"wss://127.0.0.1:{endpoint.port}"
         assert asyncio.run(get_time(url, ssl=trust))["result"] is True
-        with urllib.request.urlopen(f"https://127.0.0.1:{endpoint.port}/version",
-                                    context=trust, timeout=20) as page:
+        with urllib.request.urlopen(
+            f"https://127.0.0.1:{endpoint.port}/version", context=trust, timeout=20
+        ) as page:
             assert json.loads(page.read())["protocol"]["major"] == 2
         with pytest.raises(ssl.SSLCertVerificationError):  # an untrusted certificate
             asyncio.run(get_time(url, ssl=ssl.create_default_context()))
@@ -140,24 +151,43 @@ async def handshake_status(url: str, origin: str | None = None) -> int:
 
 
 def test_origins_and_the_client_limit():
-    args = ["--allowed-origins", "https://*.example.org", "http://localhost:8080",
-            "--max-clients", "2"]
+    args = [
+        "--allowed-origins",
+        "https://*.example.org",
+        "http://localhost:8080",
+        "--max-clients",
+        "2",
+    ]
     with running_bridge(args) as endpoint:
         url, own = endpoint.url, f"http://127.0.0.1:{endpoint.port}"
 
         async def probe() -> dict[str, int]:
-            statuses = {origin or "none": await handshake_status(url, origin) for origin in (
-                None, "https://app.example.org", "http://localhost:8080", own,
-                "https://evil.example.com", "null")}
+            statuses = {
+                origin or "none": await handshake_status(url, origin)
+                for origin in (
+                    None,
+                    "https://app.example.org",
+                    "http://localhost:8080",
+                    own,
+                    "https://evil.example.com",
+                    "null",
+                )
+            }
             async with websockets.connect(url), websockets.connect(url):
                 statuses["third client"] = await handshake_status(url)
             return statuses
 
         statuses = asyncio.run(probe())
         log = endpoint.log.text()
-    assert statuses == {"none": 101, "https://app.example.org": 101,
-                        "http://localhost:8080": 101, own: 101,
-                        "https://evil.example.com": 403, "null": 403, "third client": 503}
+    assert statuses == {
+        "none": 101,
+        "https://app.example.org": 101,
+        "http://localhost:8080": 101,
+        own: 101,
+        "https://evil.example.com": 403,
+        "null": 403,
+        "third client": 503,
+    }
     assert "Origin https://evil.example.com is not allowed" in log
 
 

@@ -18,8 +18,9 @@ from .bridge_process import running_bridge
 
 def test_roslibpy_calls_and_subscribes_over_wss(tmp_path):
     certificate = make_certificate(tmp_path)
-    with running_bridge(["--certfile", str(certificate.certfile),
-                         "--keyfile", str(certificate.keyfile)]) as endpoint:
+    with running_bridge(
+        ["--certfile", str(certificate.certfile), "--keyfile", str(certificate.keyfile)]
+    ) as endpoint:
         ros = roslibpy.Ros("127.0.0.1", endpoint.port, is_secure=True)
         ros.run(timeout=rp.CONNECT_TIMEOUT_S)
         try:
@@ -42,8 +43,9 @@ def test_roslibpy_calls_and_subscribes_over_wss(tmp_path):
 
 def test_roslibpy_does_not_verify_the_certificate(tmp_path):
     certificate = make_certificate(tmp_path)
-    with running_bridge(["--certfile", str(certificate.certfile),
-                         "--keyfile", str(certificate.keyfile)]) as endpoint:
+    with running_bridge(
+        ["--certfile", str(certificate.certfile), "--keyfile", str(certificate.keyfile)]
+    ) as endpoint:
         ros = roslibpy.Ros("127.0.0.1", endpoint.port, is_secure=True)  # trusts nothing
         try:
             ros.run(timeout=rp.CONNECT_TIMEOUT_S)

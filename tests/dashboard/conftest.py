@@ -14,8 +14,9 @@ def browser_tools() -> None:
     """Fail (never skip) when Chromium, playwright-core or the web build is missing."""
     missing = missing_tools()
     if missing:
-        pytest.fail("the dashboard tests need " + "; ".join(missing) + f"\n{SETUP_HINT}",
-                    pytrace=False)
+        pytest.fail(
+            "the dashboard tests need " + "; ".join(missing) + f"\n{SETUP_HINT}", pytrace=False
+        )
 
 
 @pytest.fixture(scope="module")

@@ -23,8 +23,10 @@ REPO_ROOT = Path(__file__).resolve().parents[2]
 WEB_DIR = REPO_ROOT / "web"
 SCRIPTS_DIR = Path(__file__).resolve().parent
 CHROMIUM = Path(os.environ.get("RIVERBRIDGE_CHROMIUM", "/usr/bin/chromium"))
-SETUP_HINT = "run: bash scripts/setup.sh   (or: apt-get install -y --no-install-recommends " \
-             "chromium && npm ci --prefix web && npm run build --prefix web)"
+SETUP_HINT = (
+    "run: bash scripts/setup.sh   (or: apt-get install -y --no-install-recommends "
+    "chromium && npm ci --prefix web && npm run build --prefix web)"
+)
 # Importing numpy, rosbags, Embree and building the scene on a loaded 2-core machine.
 STARTUP_TIMEOUT_S = 180.0
 STOP_TIMEOUT_S = 30.0
@@ -70,9 +72,14 @@ def running_stack(log_path: Path) -> Iterator[Stack]:
     env["PYTHONPATH"] = os.pathsep.join(filter(None, [str(REPO_ROOT), env.get("PYTHONPATH")]))
     with log_path.open("w") as log:
         process = subprocess.Popen(
-            [sys.executable, "-m", "clients.stack.up_cli", "--port", "0"], cwd=REPO_ROOT, env=env,
-            stdin=subprocess.DEVNULL, stdout=log, stderr=subprocess.STDOUT,
-            start_new_session=True)
+            [sys.executable, "-m", "clients.stack.up_cli", "--port", "0"],
+            cwd=REPO_ROOT,
+            env=env,
+            stdin=subprocess.DEVNULL,
+            stdout=log,
+            stderr=subprocess.STDOUT,
+            start_new_session=True,
+        )
     try:
         yield _wait_ready(process, log_path)
     finally:

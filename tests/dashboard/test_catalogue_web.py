@@ -18,16 +18,22 @@ TOPIC_NAME = re.compile(r"""["'`](/[a-z_]+(?:/[a-z_]+)*)["'`]""")
 
 
 def sources() -> dict[str, str]:
-    return {str(path.relative_to(WEB_SRC)): path.read_text(encoding="utf-8")
-            for path in sorted(WEB_SRC.rglob("*.js"))}
+    return {
+        str(path.relative_to(WEB_SRC)): path.read_text(encoding="utf-8")
+        for path in sorted(WEB_SRC.rglob("*.js"))
+    }
 
 
 def test_the_web_copy_is_the_catalogue():
     """Rewrite it with `python3 scripts/catalogue_json.py` after changing the catalogue."""
     copy = json.loads((WEB_SRC / "catalogue.json").read_text(encoding="utf-8"))
     assert copy == as_data(), "web/src/catalogue.json is stale: run scripts/catalogue_json.py"
-    check = subprocess.run([sys.executable, str(REPO_ROOT / "scripts" / "catalogue_json.py"),
-                            "--check"], capture_output=True, text=True, check=False)
+    check = subprocess.run(
+        [sys.executable, str(REPO_ROOT / "scripts" / "catalogue_json.py"), "--check"],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
     assert check.returncode == 0, check.stderr
 
 

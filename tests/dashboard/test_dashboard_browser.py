@@ -39,10 +39,20 @@ PROBE_SPANS = (
 
 
 def probe_trace(stamp_ns: int) -> dict[str, Any]:
-    spans = [{"topic": PROBE_TOPIC, "stamp_ns": stamp_ns, "stage": stage, "process": process,
-              "peer": peer, "start_ns": stamp_ns + int(start_ms * 1e6),
-              "end_ns": stamp_ns + int(end_ms * 1e6), "payload_bytes": 1000, "wire_bytes": 1100}
-             for stage, process, peer, start_ms, end_ms in PROBE_SPANS]
+    spans = [
+        {
+            "topic": PROBE_TOPIC,
+            "stamp_ns": stamp_ns,
+            "stage": stage,
+            "process": process,
+            "peer": peer,
+            "start_ns": stamp_ns + int(start_ms * 1e6),
+            "end_ns": stamp_ns + int(end_ms * 1e6),
+            "payload_bytes": 1000,
+            "wire_bytes": 1100,
+        }
+        for stage, process, peer, start_ms, end_ms in PROBE_SPANS
+    ]
     return {"host": "dashboard-test", "spans": spans}
 
 
@@ -61,8 +71,13 @@ async def drive(stack: Stack, screenshot: Path) -> dict[str, Any]:
     stop = asyncio.Event()
     probe = asyncio.create_task(publish_probe_traces(stack.ws_url, stop))
     node = await asyncio.create_subprocess_exec(
-        "node", str(SCRIPTS_DIR / "drive_dashboard.mjs"), stack.page_url, str(screenshot),
-        stdout=asyncio.subprocess.PIPE, stderr=asyncio.subprocess.PIPE)
+        "node",
+        str(SCRIPTS_DIR / "drive_dashboard.mjs"),
+        stack.page_url,
+        str(screenshot),
+        stdout=asyncio.subprocess.PIPE,
+        stderr=asyncio.subprocess.PIPE,
+    )
     try:
         out, err = await asyncio.wait_for(node.communicate(), SCENARIO_TIMEOUT_S)
     finally:
@@ -84,9 +99,17 @@ def seen(stack: Stack) -> dict[str, Any]:
 
 def test_page_connects_and_receives_every_panels_topics(seen: dict[str, Any]) -> None:
     assert seen["connected"]
-    for topic in ("/lidar/points", "/camera/image/compressed", "/radar/image", "/imu/data",
-                  "/odom", "/nav/boxes", "/nav/radar_detections", "/nav/lines",
-                  "/nav/obstacle_map"):
+    for topic in (
+        "/lidar/points",
+        "/camera/image/compressed",
+        "/radar/image",
+        "/imu/data",
+        "/odom",
+        "/nav/boxes",
+        "/nav/radar_detections",
+        "/nav/lines",
+        "/nav/obstacle_map",
+    ):
         assert seen["counts"][topic] > 0, topic
     assert seen["page_errors"] == []
 
@@ -120,8 +143,13 @@ def test_lidar_points_reach_the_map_through_the_worker(seen: dict[str, Any]) -> 
 
 def test_topic_list_names_topics_types_rates_and_clients(seen: dict[str, Any]) -> None:
     text = seen["topics_text"]
-    for expected in ("/lidar/points", "sensor_msgs/msg/PointCloud2", "/nav/boxes",
-                     "riverbridge_msgs/msg/BoxArray", "/rosbridge_websocket"):
+    for expected in (
+        "/lidar/points",
+        "sensor_msgs/msg/PointCloud2",
+        "/nav/boxes",
+        "riverbridge_msgs/msg/BoxArray",
+        "/rosbridge_websocket",
+    ):
         assert expected in text, expected
     clients = [line for line in text.splitlines() if line.startswith("/rosbridge_client_")]
     assert len(clients) >= 3, text  # simulator, navigation and the page itself
@@ -137,7 +165,7 @@ def test_restart_counts_of_up_are_shown(seen: dict[str, Any]) -> None:
     """`up` publishes its restart counts (latched /riverbridge/restarts); none happened."""
     lines = seen["topics_text"].splitlines()
     start = lines.index("restarts by riverbridge up")
-    rows = [line.split("\t")[:2] for line in lines[start + 1:start + 4]]
+    rows = [line.split("\t")[:2] for line in lines[start + 1 : start + 4]]
     assert rows == [["bridge", "0"], ["simulator", "0"], ["navigation", "0"]], lines[start:]
 
 

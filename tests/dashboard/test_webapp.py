@@ -74,13 +74,23 @@ async def test_hashed_assets_have_their_type_and_are_cached_for_good(bridge: Run
     assert headers["content-type"] == "text/css; charset=utf-8"
 
 
-@pytest.mark.parametrize("path", [
-    "/../secret.txt", "/assets/../../secret.txt", "/%2e%2e/secret.txt",
-    "/assets/%2e%2e%2f%2e%2e%2fsecret.txt", "/..%5csecret.txt", "//etc/passwd",
-    "/assets/missing.js", "/assets/", "/index.html%00.js",
-])
-async def test_nothing_outside_the_root_or_missing_is_served(bridge: RunningBridge,
-                                                             path: str) -> None:
+@pytest.mark.parametrize(
+    "path",
+    [
+        "/../secret.txt",
+        "/assets/../../secret.txt",
+        "/%2e%2e/secret.txt",
+        "/assets/%2e%2e%2f%2e%2e%2fsecret.txt",
+        "/..%5csecret.txt",
+        "//etc/passwd",
+        "/assets/missing.js",
+        "/assets/",
+        "/index.html%00.js",
+    ],
+)
+async def test_nothing_outside_the_root_or_missing_is_served(
+    bridge: RunningBridge, path: str
+) -> None:
     status, _, body = await get(bridge, path)
     assert status.startswith("HTTP/1.1 404"), (path, status)
     assert b"not for the web" not in body and b"root:" not in body
@@ -106,14 +116,16 @@ async def test_without_a_build_root_says_how_to_build_it(tmp_path: Path) -> None
 
 
 async def test_start_up_logs_the_build_command_when_there_is_no_build(
-        tmp_path: Path, caplog: pytest.LogCaptureFixture) -> None:
+    tmp_path: Path, caplog: pytest.LogCaptureFixture
+) -> None:
     async with serving(tmp_path / "no-dist"):
         pass
     assert any(BUILD_COMMAND in record.getMessage() for record in caplog.records)
 
 
 def test_web_root_comes_from_the_option_then_the_environment_then_the_repo(
-        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
     args = build_parser().parse_args(["--web-root", str(tmp_path)])
     assert config_from_args(args).web_root == tmp_path
     assert config_from_args(build_parser().parse_args([])).web_root is None

@@ -86,25 +86,68 @@ class LinkShape:
     loss_percent: float
 
     def describe(self) -> str:
-        return (f"{self.rate_mbit:g} Mbit/s, {self.delay_ms:g} ms ± {self.jitter_ms:g} ms, "
-                f"{self.loss_percent:g} % loss")
+        return (
+            f"{self.rate_mbit:g} Mbit/s, {self.delay_ms:g} ms ± {self.jitter_ms:g} ms, "
+            f"{self.loss_percent:g} % loss"
+        )
 
 
 def shape_link(host: Host, shape: LinkShape) -> str:
     """Shape `host`'s outgoing traffic; returns what was applied (netem, or the fallback)."""
-    netem = ["tc", "qdisc", "add", "dev", host.interface, "root", "netem",
-             "delay", f"{shape.delay_ms}ms", f"{shape.jitter_ms}ms", "distribution", "normal",
-             "loss", f"{shape.loss_percent}%", "rate", f"{shape.rate_mbit}mbit"]
+    netem = [
+        "tc",
+        "qdisc",
+        "add",
+        "dev",
+        host.interface,
+        "root",
+        "netem",
+        "delay",
+        f"{shape.delay_ms}ms",
+        f"{shape.jitter_ms}ms",
+        "distribution",
+        "normal",
+        "loss",
+        f"{shape.loss_percent}%",
+        "rate",
+        f"{shape.rate_mbit}mbit",
+    ]
     if _run(host.command(netem)):
         return f"netem: {shape.describe()}"
     burst_bytes = max(32 * 1024, int(shape.rate_mbit * 1e6 / 8 / 100))  # ~10 ms of traffic
-    tbf = ["tc", "qdisc", "add", "dev", host.interface, "root", "tbf",
-           "rate", f"{shape.rate_mbit}mbit", "burst", str(burst_bytes), "latency", "200ms"]
+    tbf = [
+        "tc",
+        "qdisc",
+        "add",
+        "dev",
+        host.interface,
+        "root",
+        "tbf",
+        "rate",
+        f"{shape.rate_mbit}mbit",
+        "burst",
+        str(burst_bytes),
+        "latency",
+        "200ms",
+    ]
     applied = []
     if _run(host.command(tbf)):
         applied.append(f"tbf {shape.rate_mbit:g} Mbit/s")
-    loss = ["iptables", "-A", "OUTPUT", "-o", host.interface, "-m", "statistic", "--mode",
-            "random", "--probability", f"{shape.loss_percent / 100}", "-j", "DROP"]
+    loss = [
+        "iptables",
+        "-A",
+        "OUTPUT",
+        "-o",
+        host.interface,
+        "-m",
+        "statistic",
+        "--mode",
+        "random",
+        "--probability",
+        f"{shape.loss_percent / 100}",
+        "-j",
+        "DROP",
+    ]
     if shape.loss_percent > 0 and _run(host.command(loss)):
         applied.append(f"iptables {shape.loss_percent:g} % loss")
     missing = "no delay/jitter (this kernel has no netem)"

@@ -92,8 +92,11 @@ class SetBoolResponse(IdlStruct, typename="std_srvs::srv::dds_::SetBool_Response
     message: str
 
 
-ROS2_DEFAULT_QOS = Qos(Policy.Reliability.Reliable(1_000_000_000), Policy.Durability.Volatile,
-                       Policy.History.KeepLast(10))
+ROS2_DEFAULT_QOS = Qos(
+    Policy.Reliability.Reliable(1_000_000_000),
+    Policy.Durability.Volatile,
+    Policy.History.KeepLast(10),
+)
 
 
 def take_imu(participant: DomainParticipant, count: int, timeout_s: float) -> dict:
@@ -104,17 +107,20 @@ def take_imu(participant: DomainParticipant, count: int, timeout_s: float) -> di
     while len(decoded) < count and time.monotonic() < deadline:
         for sample in reader.take(N=count):
             msg = store.deserialize_cdr(sample.serialize(), "sensor_msgs/msg/Imu")
-            decoded.append({"frame_id": msg.header.frame_id,
-                            "stamp_ns": msg.header.stamp.sec * 10**9 + msg.header.stamp.nanosec,
-                            "accel_z": msg.linear_acceleration.z,
-                            "covariance_length": len(msg.orientation_covariance)})
+            decoded.append(
+                {
+                    "frame_id": msg.header.frame_id,
+                    "stamp_ns": msg.header.stamp.sec * 10**9 + msg.header.stamp.nanosec,
+                    "accel_z": msg.linear_acceleration.z,
+                    "covariance_length": len(msg.orientation_covariance),
+                }
+            )
         time.sleep(0.01)
     return {"ok": len(decoded) >= count, "messages": decoded[:count]}
 
 
 def publish_wrench(participant: DomainParticipant, seconds: float, force_x: float) -> dict:
-    writer = DataWriter(participant, Topic(participant, "rt/cmd_wrench", Wrench),
-                        ROS2_DEFAULT_QOS)
+    writer = DataWriter(participant, Topic(participant, "rt/cmd_wrench", Wrench), ROS2_DEFAULT_QOS)
     sent = 0
     deadline = time.monotonic() + seconds
     while time.monotonic() < deadline:
@@ -126,15 +132,23 @@ def publish_wrench(participant: DomainParticipant, seconds: float, force_x: floa
 
 def call_set_bool(participant: DomainParticipant, service: str, timeout_s: float) -> dict:
     client_id = Policy.Userdata(data=b"clientid=peer.1;")  # pairs request writer and reply reader
-    writer = DataWriter(participant, Topic(participant, f"rq{service}Request", SetBoolRequest),
-                        Qos(*ROS2_DEFAULT_QOS, client_id))
-    reader = DataReader(participant, Topic(participant, f"rr{service}Reply", SetBoolResponse),
-                        Qos(*ROS2_DEFAULT_QOS, client_id))
+    writer = DataWriter(
+        participant,
+        Topic(participant, f"rq{service}Request", SetBoolRequest),
+        Qos(*ROS2_DEFAULT_QOS, client_id),
+    )
+    reader = DataReader(
+        participant,
+        Topic(participant, f"rr{service}Reply", SetBoolResponse),
+        Qos(*ROS2_DEFAULT_QOS, client_id),
+    )
     guid = writer.get_instance_handle() & (2**64 - 1)
     deadline = time.monotonic() + timeout_s
     while time.monotonic() < deadline:
-        if writer.get_publication_matched_status().current_count and \
-                reader.get_subscription_matched_status().current_count:
+        if (
+            writer.get_publication_matched_status().current_count
+            and reader.get_subscription_matched_status().current_count
+        ):
             break
         time.sleep(0.05)
     writer.write(SetBoolRequest(guid=guid, seq=1, data=True))

@@ -49,9 +49,11 @@ async def drain(sub, seconds: float) -> list[dict]:
 
 
 async def test_topics_cross_once_each_way_and_never_echo(dds_domain, registry):
-    async with two_bridges(dds_domain) as (a, b), \
-            RosbridgeClient(a.url, registry=registry) as on_a, \
-            RosbridgeClient(b.url, registry=registry) as on_b:
+    async with (
+        two_bridges(dds_domain) as (a, b),
+        RosbridgeClient(a.url, registry=registry) as on_a,
+        RosbridgeClient(b.url, registry=registry) as on_b,
+    ):
         for client in (on_a, on_b):
             await client.advertise("/chatter", "std_msgs/msg/String")
         heard_a = await on_a.subscribe("/chatter", "std_msgs/msg/String", maxsize=1000)
@@ -96,9 +98,11 @@ async def drain_until_probe(sub) -> bool:
 
 
 async def test_rosapi_of_one_bridge_lists_the_other_bridges_graph(dds_domain, registry):
-    async with two_bridges(dds_domain) as (a, b), \
-            RosbridgeClient(a.url, registry=registry) as on_a, \
-            RosbridgeClient(b.url, registry=registry) as on_b:
+    async with (
+        two_bridges(dds_domain) as (a, b),
+        RosbridgeClient(a.url, registry=registry) as on_a,
+        RosbridgeClient(b.url, registry=registry) as on_b,
+    ):
         await on_a.advertise("/sonar", "sensor_msgs/msg/Range")
         await on_a.subscribe("/cmd_wrench", "geometry_msgs/msg/Wrench")
         node_a = a.dds.node
@@ -142,10 +146,13 @@ async def drain_first(sub, timeout_s: float = 10.0) -> dict:
 
 
 async def test_a_service_provided_on_one_bridge_answers_calls_made_on_the_other(
-        dds_domain, registry):
-    async with two_bridges(dds_domain) as (a, b), \
-            RosbridgeClient(a.url, registry=registry) as caller, \
-            RosbridgeClient(b.url, registry=registry) as provider:
+    dds_domain, registry
+):
+    async with (
+        two_bridges(dds_domain) as (a, b),
+        RosbridgeClient(a.url, registry=registry) as caller,
+        RosbridgeClient(b.url, registry=registry) as provider,
+    ):
         requests = []
 
         async def gate(args):
@@ -161,10 +168,12 @@ async def test_a_service_provided_on_one_bridge_answers_calls_made_on_the_other(
             return None
 
         first = await until(answered)
-        second = await caller.call_service("/lock_gate", {"data": False},
-                                           type="std_srvs/srv/SetBool")
-        provider_node = (await caller.call_service(
-            "/rosapi/service_node", {"service": "/lock_gate"}))["node"]
+        second = await caller.call_service(
+            "/lock_gate", {"data": False}, type="std_srvs/srv/SetBool"
+        )
+        provider_node = (
+            await caller.call_service("/rosapi/service_node", {"service": "/lock_gate"})
+        )["node"]
         await provider.unadvertise_service("/lock_gate")
 
         async def withdrawn():
@@ -182,9 +191,11 @@ async def test_a_service_provided_on_one_bridge_answers_calls_made_on_the_other(
 
 
 async def test_latched_topic_reaches_a_late_subscriber_of_the_other_bridge(dds_domain, registry):
-    async with two_bridges(dds_domain) as (a, b), \
-            RosbridgeClient(a.url, registry=registry) as on_a, \
-            RosbridgeClient(b.url, registry=registry) as on_b:
+    async with (
+        two_bridges(dds_domain) as (a, b),
+        RosbridgeClient(a.url, registry=registry) as on_a,
+        RosbridgeClient(b.url, registry=registry) as on_b,
+    ):
         await on_a.advertise("/map_origin", "geometry_msgs/msg/Point", latch=True)
         await on_a.publish("/map_origin", {"x": 1.0, "y": 2.0, "z": 3.0})
 
@@ -200,16 +211,35 @@ async def test_latched_topic_reaches_a_late_subscriber_of_the_other_bridge(dds_d
 
 
 async def test_best_effort_qos_from_advertise_and_cdr_through_cbor_raw(dds_domain, registry):
-    imu = {"header": {"stamp": {"sec": 5, "nanosec": 6}, "frame_id": "imu"},
-           "linear_acceleration": {"x": 0.0, "y": 0.0, "z": 9.81}}
-    async with two_bridges(dds_domain) as (a, b), \
-            websockets.connect(a.url) as publisher, websockets.connect(b.url) as subscriber:
-        await publisher.send(json.dumps({
-            "op": "advertise", "topic": "/imu/data", "type": "sensor_msgs/msg/Imu",
-            "qos": {"reliability": "best_effort", "depth": 5}}))
-        await subscriber.send(json.dumps({"op": "subscribe", "topic": "/imu/data",
-                                          "type": "sensor_msgs/msg/Imu",
-                                          "compression": "cbor-raw"}))
+    imu = {
+        "header": {"stamp": {"sec": 5, "nanosec": 6}, "frame_id": "imu"},
+        "linear_acceleration": {"x": 0.0, "y": 0.0, "z": 9.81},
+    }
+    async with (
+        two_bridges(dds_domain) as (a, b),
+        websockets.connect(a.url) as publisher,
+        websockets.connect(b.url) as subscriber,
+    ):
+        await publisher.send(
+            json.dumps(
+                {
+                    "op": "advertise",
+                    "topic": "/imu/data",
+                    "type": "sensor_msgs/msg/Imu",
+                    "qos": {"reliability": "best_effort", "depth": 5},
+                }
+            )
+        )
+        await subscriber.send(
+            json.dumps(
+                {
+                    "op": "subscribe",
+                    "topic": "/imu/data",
+                    "type": "sensor_msgs/msg/Imu",
+                    "compression": "cbor-raw",
+                }
+            )
+        )
 
         async def arrived():
             await publisher.send(json.dumps({"op": "publish", "topic": "/imu/data", "msg": imu}))

@@ -20,12 +20,27 @@ def bridge_config(argv: list[str]):
 
 
 def test_dds_is_off_by_default_and_on_loopback_when_on(monkeypatch):
-    for name in ("RIVERBRIDGE_DDS", "ROS_DOMAIN_ID", "RIVERBRIDGE_DDS_INTERFACE",
-                 "RIVERBRIDGE_DDS_PEERS"):
+    for name in (
+        "RIVERBRIDGE_DDS",
+        "ROS_DOMAIN_ID",
+        "RIVERBRIDGE_DDS_INTERFACE",
+        "RIVERBRIDGE_DDS_PEERS",
+    ):
         monkeypatch.delenv(name, raising=False)
     assert bridge_config([]).dds is False
-    config = bridge_config(["--dds", "--domain", "42", "--dds-peer", "10.0.0.2,10.0.0.3",
-                            "--dds-peer", "10.0.0.4", "--dds-node", "/vessel/bridge"])
+    config = bridge_config(
+        [
+            "--dds",
+            "--domain",
+            "42",
+            "--dds-peer",
+            "10.0.0.2,10.0.0.3",
+            "--dds-peer",
+            "10.0.0.4",
+            "--dds-node",
+            "/vessel/bridge",
+        ]
+    )
     assert (config.dds, config.dds_domain, config.dds_interface) == (True, 42, "lo")
     assert config.dds_peers == ("10.0.0.2", "10.0.0.3", "10.0.0.4")
     assert config.dds_multicast == "false" and config.dds_node == "/vessel/bridge"
@@ -43,16 +58,19 @@ def test_environment_gives_defaults_and_options_win(monkeypatch):
     assert config.dds_domain == 8 and config.dds_peers == ("10.0.0.9",)
 
 
-@pytest.mark.parametrize(("argv", "env", "named"), [
-    (["--dds", "--domain", "233"], {}, "--domain"),
-    (["--dds", "--domain", "x"], {}, "--domain"),
-    (["--dds", "--dds-interface", "lo;reboot"], {}, "dds_interface"),
-    (["--dds", "--dds-peer", "10.0.0.2 10.0.0.3"], {}, "dds_peers"),
-    (["--dds", "--dds-multicast", "maybe"], {}, "--dds-multicast"),
-    (["--dds", "--dds-node", "not a name"], {}, "dds_node"),
-    (["--dds"], {"ROS_DOMAIN_ID": "many"}, "ROS_DOMAIN_ID"),
-    (["--dds"], {"RIVERBRIDGE_DDS": "perhaps"}, "RIVERBRIDGE_DDS"),
-])
+@pytest.mark.parametrize(
+    ("argv", "env", "named"),
+    [
+        (["--dds", "--domain", "233"], {}, "--domain"),
+        (["--dds", "--domain", "x"], {}, "--domain"),
+        (["--dds", "--dds-interface", "lo;reboot"], {}, "dds_interface"),
+        (["--dds", "--dds-peer", "10.0.0.2 10.0.0.3"], {}, "dds_peers"),
+        (["--dds", "--dds-multicast", "maybe"], {}, "--dds-multicast"),
+        (["--dds", "--dds-node", "not a name"], {}, "dds_node"),
+        (["--dds"], {"ROS_DOMAIN_ID": "many"}, "ROS_DOMAIN_ID"),
+        (["--dds"], {"RIVERBRIDGE_DDS": "perhaps"}, "RIVERBRIDGE_DDS"),
+    ],
+)
 def test_bad_dds_options_exit_2_naming_them(argv, env, named, monkeypatch, capsys):
     for name, value in env.items():
         monkeypatch.setenv(name, value)
@@ -63,8 +81,9 @@ def test_bad_dds_options_exit_2_naming_them(argv, env, named, monkeypatch, capsy
 
 
 def test_print_dds_config_gives_the_xml_for_ros2_nodes(capsys):
-    assert cli.main(["--print-dds-config", "--dds-interface", "veth0",
-                     "--dds-peer", "10.0.0.2"]) == 0
+    assert (
+        cli.main(["--print-dds-config", "--dds-interface", "veth0", "--dds-peer", "10.0.0.2"]) == 0
+    )
     document = ET.fromstring(capsys.readouterr().out)
     assert document.find("Domain/General/Interfaces/NetworkInterface").get("name") == "veth0"
     assert [p.get("address") for p in document.iter("Peer")] == ["10.0.0.2"]
@@ -73,22 +92,46 @@ def test_print_dds_config_gives_the_xml_for_ros2_nodes(capsys):
 @pytest.mark.slow
 def test_a_domain_that_cannot_be_joined_exits_1_with_the_reason(dds_domain):
     result = subprocess.run(
-        [sys.executable, "-m", "bridge", "--port", "0", "--dds", "--domain", str(dds_domain),
-         "--dds-interface", "nosuch0"],
-        cwd=REPO_ROOT, env=repo_env(), capture_output=True, text=True, timeout=120)
+        [
+            sys.executable,
+            "-m",
+            "bridge",
+            "--port",
+            "0",
+            "--dds",
+            "--domain",
+            str(dds_domain),
+            "--dds-interface",
+            "nosuch0",
+        ],
+        cwd=REPO_ROOT,
+        env=repo_env(),
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert result.returncode == 1
     assert "cannot join DDS domain" in result.stderr and "nosuch0" in result.stderr
     assert "Traceback" not in result.stderr
 
 
 def test_up_passes_dds_options_to_the_bridge(capsys):
-    args = up_cli.build_parser().parse_args(["--dds", "--domain", "7", "--dds-interface",
-                                             "eth0", "--dds-peer", "10.0.0.2"])
+    args = up_cli.build_parser().parse_args(
+        ["--dds", "--domain", "7", "--dds-interface", "eth0", "--dds-peer", "10.0.0.2"]
+    )
     bridge, _, _ = stack_components(up_cli.config_from_args(args))
-    assert bridge.args[-7:] == ("--dds", "--domain", "7", "--dds-interface", "eth0",
-                                "--dds-peer", "10.0.0.2")
+    assert bridge.args[-7:] == (
+        "--dds",
+        "--domain",
+        "7",
+        "--dds-interface",
+        "eth0",
+        "--dds-peer",
+        "10.0.0.2",
+    )
     assert stack_components(up_cli.config_from_args(up_cli.build_parser().parse_args([])))[
-        0].args == ("--host", "127.0.0.1", "--port", "9090")
+        0
+    ].args == ("--host", "127.0.0.1", "--port", "9090")
     with pytest.raises(SystemExit):
         up_cli.main(["--domain", "999"])
     assert "--domain" in capsys.readouterr().err

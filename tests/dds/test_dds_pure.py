@@ -30,10 +30,12 @@ from schemas.codec_cdr import from_cdr, to_cdr
 P1, P2 = bytes(range(12)) + b"\x00\x00\x01\xc1", bytes(range(1, 13)) + b"\x00\x00\x01\xc1"
 
 
-def endpoint(n: int, participant: bytes, topic: str, dds_type: str, writer: bool,
-             qos: QosProfile = DEFAULT) -> Endpoint:
-    return Endpoint(participant[:12] + n.to_bytes(4, "big"), participant, topic, dds_type,
-                    writer, qos)
+def endpoint(
+    n: int, participant: bytes, topic: str, dds_type: str, writer: bool, qos: QosProfile = DEFAULT
+) -> Endpoint:
+    return Endpoint(
+        participant[:12] + n.to_bytes(4, "big"), participant, topic, dds_type, writer, qos
+    )
 
 
 def test_ros_names_map_to_rmw_cyclonedds_wire_names():
@@ -50,15 +52,20 @@ def test_ros_names_map_to_rmw_cyclonedds_wire_names():
 
 def test_ros_types_map_to_dds_type_names():
     assert naming.type_to_dds("sensor_msgs/msg/Imu") == "sensor_msgs::msg::dds_::Imu_"
-    assert (naming.type_to_dds("std_srvs/srv/SetBool_Request")
-            == "std_srvs::srv::dds_::SetBool_Request_")
+    assert (
+        naming.type_to_dds("std_srvs/srv/SetBool_Request")
+        == "std_srvs::srv::dds_::SetBool_Request_"
+    )
     assert naming.type_from_dds("geometry_msgs::msg::dds_::Wrench_") == "geometry_msgs/msg/Wrench"
     assert naming.type_from_dds("std_srvs::srv::dds_::SetBool_Response_") == (
-        "std_srvs/srv/SetBool_Response")
+        "std_srvs/srv/SetBool_Response"
+    )
     for other in ("Imu", "sensor_msgs::msg::Imu_", "a::b::dds_::C_", "a::msg::dds_::C"):
         assert naming.type_from_dds(other) is None
     assert naming.service_type_of_part("std_srvs/srv/SetBool_Request") == (
-        "std_srvs/srv/SetBool", "request")
+        "std_srvs/srv/SetBool",
+        "request",
+    )
     assert naming.service_type_of_part("std_msgs/msg/String") is None
     assert naming.node_name("/", "talker") == "/talker"
     assert naming.node_name("/ns/", "t") == "/ns/t"
@@ -69,16 +76,24 @@ def test_writer_qos_follows_ros2_defaults_latch_and_the_advertise_qos_object():
     assert writer_profile(False, None) == QosProfile(True, False, 10)
     assert writer_profile(True, None) == LATCHED == QosProfile(True, True, 1)
     assert writer_profile(False, {"reliability": "best_effort", "depth": 5}) == QosProfile(
-        False, False, 5)
+        False, False, 5
+    )
     assert writer_profile(False, {"durability": "transient_local", "history": "keep_all"}) == (
-        QosProfile(True, True, 0))
-    for bad in ({"reliability": "sometimes"}, {"depth": 0}, {"depth": True},
-                {"history": "keep_some"}):
+        QosProfile(True, True, 0)
+    )
+    for bad in (
+        {"reliability": "sometimes"},
+        {"depth": 0},
+        {"depth": True},
+        {"history": "keep_some"},
+    ):
         with pytest.raises(QosError):
             writer_profile(False, bad)
     assert advertised_profile(True, {"reliability": "sometimes"}) == (
-        LATCHED, "qos.reliability must be one of reliable, best_effort, best_available, "
-                 "system_default; got 'sometimes'")
+        LATCHED,
+        "qos.reliability must be one of reliable, best_effort, best_available, "
+        "system_default; got 'sometimes'",
+    )
     assert advertised_profile(False, {"depth": 3}) == (QosProfile(depth=3), "")
 
 
@@ -118,7 +133,7 @@ def test_cyclone_xml_keeps_dds_on_the_named_interface_without_multicast():
     assert veth.find("Domain/General/AllowMulticast").text == "spdp"
     assert [p.get("address") for p in veth.iter("Peer")] == ["10.0.0.2"]
     assert veth.find("Domain/Internal") is None
-    for bad in ({"interface": "lo\"/><x"}, {"peers": ("1.2.3.4\"",)}, {"multicast": "maybe"}):
+    for bad in ({"interface": 'lo"/><x'}, {"peers": ('1.2.3.4"',)}, {"multicast": "maybe"}):
         with pytest.raises(ValueError):
             CycloneSettings(**bad)
 
@@ -131,10 +146,17 @@ def test_domain_view_names_endpoints_after_ros_discovery_info_nodes():
     request = endpoint(4, P1, "rq/setRequest", "std_srvs::srv::dds_::SetBool_Request_", False)
     reply = endpoint(5, P1, "rr/setReply", "std_srvs::srv::dds_::SetBool_Response_", True)
     plain = endpoint(6, P2, "plain_dds_topic", "Whatever", True)
-    view.update_snapshot(Snapshot(frozenset({P1, P2}),
-                                  (talker_writer, listener, odd_type, request, reply, plain)))
-    view.update_nodes(P1, (NodeEntities("/talker", frozenset({request.guid}),
-                                        frozenset({talker_writer.guid, reply.guid})),))
+    view.update_snapshot(
+        Snapshot(frozenset({P1, P2}), (talker_writer, listener, odd_type, request, reply, plain))
+    )
+    view.update_nodes(
+        P1,
+        (
+            NodeEntities(
+                "/talker", frozenset({request.guid}), frozenset({talker_writer.guid, reply.guid})
+            ),
+        ),
+    )
     topics = view.topics()
     assert list(topics) == ["/chatter"]
     assert topics["/chatter"].type_name == "std_msgs/msg/String"
@@ -153,10 +175,16 @@ def test_graph_sync_adds_and_removes_remote_endpoints_but_never_local_ones():
     graph, sync, view = Graph(), GraphSync(), DomainView()
     graph.add_publisher("/chatter", "/rosbridge_client_1", None, latch=False)
     graph.declare_type("/chatter", "std_msgs/msg/String")
-    view.update_snapshot(Snapshot(frozenset({P1}), (
-        endpoint(1, P1, "rt/chatter", "std_msgs::msg::dds_::String_", True),
-        endpoint(2, P1, "rt/odom", "nav_msgs::msg::dds_::Odometry_", False),
-        endpoint(3, P1, "rt/clash", "std_msgs::msg::dds_::Bool_", True))))
+    view.update_snapshot(
+        Snapshot(
+            frozenset({P1}),
+            (
+                endpoint(1, P1, "rt/chatter", "std_msgs::msg::dds_::String_", True),
+                endpoint(2, P1, "rt/odom", "nav_msgs::msg::dds_::Odometry_", False),
+                endpoint(3, P1, "rt/clash", "std_msgs::msg::dds_::Bool_", True),
+            ),
+        )
+    )
     view.update_nodes(P1, (NodeEntities("/remote"),))
     graph.declare_type("/clash", "std_msgs/msg/String")
     graph.add_subscriber("/clash", "/rosbridge_client_1")

@@ -39,8 +39,14 @@ async def run_peer(domain: int, *args: str, timeout_s: float = 90.0) -> dict:
     """Run ros2_peer.py in its own process with a loopback-only Cyclone configuration."""
     env = {"CYCLONEDDS_URI": cyclone_xml(CycloneSettings(), tuned=False), "PATH": "/usr/bin"}
     process = await asyncio.create_subprocess_exec(
-        sys.executable, str(PEER), str(domain), *args, env=env,
-        stdout=asyncio.subprocess.PIPE, stderr=asyncio.subprocess.PIPE)
+        sys.executable,
+        str(PEER),
+        str(domain),
+        *args,
+        env=env,
+        stdout=asyncio.subprocess.PIPE,
+        stderr=asyncio.subprocess.PIPE,
+    )
     try:
         async with asyncio.timeout(timeout_s):
             out, err = await process.communicate()
@@ -57,8 +63,10 @@ async def test_independent_participant_reads_imu_and_steers_the_vessel(dds_domai
     scene = await asyncio.to_thread(build_scene, LIGHT.scene, seed=LIGHT.seed)
     stop = asyncio.Event()
     config = BridgeConfig(host="127.0.0.1", port=0, dds=True, dds_domain=dds_domain)
-    async with run_bridge(config) as bridge, \
-            RosbridgeClient(bridge.url, registry=registry) as watcher:
+    async with (
+        run_bridge(config) as bridge,
+        RosbridgeClient(bridge.url, registry=registry) as watcher,
+    ):
         odom = await watcher.subscribe("/odom", "nav_msgs/msg/Odometry", maxsize=1)
         sim = asyncio.create_task(serve(bridge.url, LIGHT, stop, scene=scene))
         try:
@@ -107,8 +115,10 @@ async def test_independent_participant_calls_a_service_a_client_provides(dds_dom
         requests.append(args)
         return {"success": True, "message": "lock gate opening"}
 
-    async with run_bridge(config) as bridge, \
-            RosbridgeClient(bridge.url, registry=registry) as provider:
+    async with (
+        run_bridge(config) as bridge,
+        RosbridgeClient(bridge.url, registry=registry) as provider,
+    ):
         await provider.advertise_service("/lock_gate", "std_srvs/srv/SetBool", gate)
         answer = await run_peer(dds_domain, "call", "/lock_gate", "60")
     assert answer == {"ok": True, "success": True, "message": "lock gate opening"}

@@ -27,14 +27,30 @@ RESULT_TIMEOUT_S = 120.0
 
 
 def bridge_argv(host: Host, peer: Host, domain: int) -> list[str]:
-    return host.command([sys.executable, "-m", "bridge", "--host", "127.0.0.1", "--port", "0",
-                         "--dds", "--domain", str(domain), "--dds-interface", host.interface,
-                         "--dds-peer", peer.address])
+    return host.command(
+        [
+            sys.executable,
+            "-m",
+            "bridge",
+            "--host",
+            "127.0.0.1",
+            "--port",
+            "0",
+            "--dds",
+            "--domain",
+            str(domain),
+            "--dds-interface",
+            host.interface,
+            "--dds-peer",
+            peer.address,
+        ]
+    )
 
 
 def start(argv: list[str], cwd: Path | None = None) -> subprocess.Popen[str]:
-    return subprocess.Popen(argv, cwd=cwd, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                            text=True)
+    return subprocess.Popen(
+        argv, cwd=cwd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+    )
 
 
 def result_of(process: subprocess.Popen[str], timeout_s: float = RESULT_TIMEOUT_S) -> dict:
@@ -56,27 +72,72 @@ def test_roslibpy_on_host_a_reaches_roslibjs_on_host_b_through_dds(dds_domain):
     if reason is not None:
         pytest.skip(f"no network namespaces here: {reason}")
     node = node_executable()
-    with two_hosts() as (a, b), \
-            running(bridge_argv(a, b, dds_domain)) as bridge_a, \
-            running(bridge_argv(b, a, dds_domain)) as bridge_b:
+    with (
+        two_hosts() as (a, b),
+        running(bridge_argv(a, b, dds_domain)) as bridge_a,
+        running(bridge_argv(b, a, dds_domain)) as bridge_b,
+    ):
         port_a = bridge_a.wait_for_line(LISTENING).group("port")
         url_b = f"ws://127.0.0.1:{bridge_b.wait_for_line(LISTENING).group('port')}"
         clients = [
-            start(b.command([node, str(JS_DIR / "subscribe_first.mjs"), url_b, "/chatter",
-                             "std_msgs/msg/String", "none"]), cwd=JS_DIR),
-            start(b.command([node, str(JS_DIR / "provide_service.mjs"), url_b, "/lock_gate",
-                             "1", "async"]), cwd=JS_DIR),
-            start(a.command([sys.executable, str(ROSLIBPY_HOST), "127.0.0.1", port_a,
-                             "publish", "/chatter", "90"])),
+            start(
+                b.command(
+                    [
+                        node,
+                        str(JS_DIR / "subscribe_first.mjs"),
+                        url_b,
+                        "/chatter",
+                        "std_msgs/msg/String",
+                        "none",
+                    ]
+                ),
+                cwd=JS_DIR,
+            ),
+            start(
+                b.command(
+                    [node, str(JS_DIR / "provide_service.mjs"), url_b, "/lock_gate", "1", "async"]
+                ),
+                cwd=JS_DIR,
+            ),
+            start(
+                a.command(
+                    [
+                        sys.executable,
+                        str(ROSLIBPY_HOST),
+                        "127.0.0.1",
+                        port_a,
+                        "publish",
+                        "/chatter",
+                        "90",
+                    ]
+                )
+            ),
         ]
         try:
             received = result_of(clients[0])
-            listed = result_of(start(b.command([node, str(JS_DIR / "rosapi.mjs"), url_b,
-                                                "/chatter", "std_msgs/msg/String"]),
-                                     cwd=JS_DIR))
-            called = result_of(start(a.command([sys.executable, str(ROSLIBPY_HOST),
-                                                "127.0.0.1", port_a, "call", "/lock_gate",
-                                                "90"])))
+            listed = result_of(
+                start(
+                    b.command(
+                        [node, str(JS_DIR / "rosapi.mjs"), url_b, "/chatter", "std_msgs/msg/String"]
+                    ),
+                    cwd=JS_DIR,
+                )
+            )
+            called = result_of(
+                start(
+                    a.command(
+                        [
+                            sys.executable,
+                            str(ROSLIBPY_HOST),
+                            "127.0.0.1",
+                            port_a,
+                            "call",
+                            "/lock_gate",
+                            "90",
+                        ]
+                    )
+                )
+            )
             provided = result_of(clients[1])
         finally:
             for process in clients:

@@ -55,8 +55,14 @@ def exchange(writers: list[tuple[RawWriter, bytes]], readers: list[RawReader]) -
 def sample_message(registry, type_name: str) -> dict:
     msg = normalize(registry.message(type_name), {}, now_ns=1)
     if type_name == "sensor_msgs/msg/PointCloud2":
-        msg.update(width=3, height=1, point_step=4, row_step=12, data=bytes(range(12)),
-                   fields=[{"name": "x", "offset": 0, "datatype": 7, "count": 1}])
+        msg.update(
+            width=3,
+            height=1,
+            point_step=4,
+            row_step=12,
+            data=bytes(range(12)),
+            fields=[{"name": "x", "offset": 0, "datatype": 7, "count": 1}],
+        )
     if type_name == "nav_msgs/msg/Path":
         pose = normalize(registry.message("geometry_msgs/msg/PoseStamped"), {}, now_ns=1)
         msg["poses"] = [pose, pose]
@@ -91,8 +97,9 @@ def test_service_parts_carry_the_request_header(pair, registry):
     writer = first.writer(topic, first.types.service_part(spec.request), SERVICES)
     reader = second.reader(topic, second.types.service_part(spec.request), SERVICES)
     assert writer.entity.topic.typename == "std_srvs::srv::dds_::SetBool_Request_"
-    cdr = request_header.wrap(to_cdr(registry, spec.request.name, {"data": True}),
-                              RequestId(writer.instance_handle, 3))
+    cdr = request_header.wrap(
+        to_cdr(registry, spec.request.name, {"data": True}), RequestId(writer.instance_handle, 3)
+    )
     (got,) = exchange([(writer, cdr)], [reader])
     request, body = request_header.unwrap(got)
     assert request == RequestId(writer.instance_handle, 3)

@@ -36,8 +36,7 @@ def interpolate(value: Any, env: Mapping[str, str]) -> Any:
     return value
 
 
-def load_compose(env: Mapping[str, str] | None = None,
-                 path: Path = COMPOSE_FILE) -> dict[str, Any]:
+def load_compose(env: Mapping[str, str] | None = None, path: Path = COMPOSE_FILE) -> dict[str, Any]:
     """docker-compose.yml (or ``path``) with YAML merge keys resolved and variables from
     ``env``."""
     return interpolate(yaml.safe_load(path.read_text()), env or {})
@@ -89,8 +88,9 @@ def dockerignore_patterns() -> list[str]:
     return [line.strip() for line in lines if line.strip() and not line.startswith("#")]
 
 
-def localize(words: list[str], port: int, config_dir: Path,
-             python: str = sys.executable) -> list[str]:
+def localize(
+    words: list[str], port: int, config_dir: Path, python: str = sys.executable
+) -> list[str]:
     """A container command line as a local one: ``python`` is this interpreter (or
     ``python``), the ``bridge`` host and port 9090 are loopback and ``port``, ``/config`` is
     ``config_dir``."""

@@ -45,13 +45,14 @@ def cache_dir() -> Path:
     return folder
 
 
-def run(*argv: str, timeout_s: float = 600.0, check: bool = True,
-        **kwargs: object) -> subprocess.CompletedProcess[str]:
-    result = subprocess.run(argv, capture_output=True, text=True, timeout=timeout_s,
-                            **kwargs)  # type: ignore[call-overload]
+def run(
+    *argv: str, timeout_s: float = 600.0, check: bool = True, **kwargs: object
+) -> subprocess.CompletedProcess[str]:
+    result = subprocess.run(argv, capture_output=True, text=True, timeout=timeout_s, **kwargs)  # type: ignore[call-overload]
     if check and result.returncode != 0:
-        raise RuntimeError(f"{' '.join(argv)} exited {result.returncode}:\n{result.stdout}\n"
-                           f"{result.stderr}")
+        raise RuntimeError(
+            f"{' '.join(argv)} exited {result.returncode}:\n{result.stdout}\n{result.stderr}"
+        )
     return result
 
 
@@ -88,9 +89,13 @@ def _engine() -> Iterator[None]:
         raise EngineUnavailable("no Docker engine runs and only root can start dockerd")
     log_path = cache_dir() / "dockerd.log"
     with open(log_path, "wb") as log:
-        daemon = subprocess.Popen([dockerd, "--bridge=none", "--iptables=false",
-                                   "--ip6tables=false"], stdout=log, stderr=subprocess.STDOUT,
-                                  stdin=subprocess.DEVNULL, start_new_session=True)
+        daemon = subprocess.Popen(
+            [dockerd, "--bridge=none", "--iptables=false", "--ip6tables=false"],
+            stdout=log,
+            stderr=subprocess.STDOUT,
+            stdin=subprocess.DEVNULL,
+            start_new_session=True,
+        )
     try:
         deadline = time.monotonic() + ENGINE_START_S
         while not engine_answers():
@@ -132,13 +137,20 @@ def apt_source() -> tuple[str, str]:
     suite = re.search(r"^VERSION_CODENAME=(\w+)", release, re.M)
     if suite is None:
         raise EngineUnavailable("not a Debian release (no VERSION_CODENAME in /etc/os-release)")
-    sources = "\n".join(path.read_text() for path in [
-        *Path("/etc/apt").glob("sources.list"), *Path("/etc/apt/sources.list.d").glob("*")]
-        if path.is_file())
+    sources = "\n".join(
+        path.read_text()
+        for path in [
+            *Path("/etc/apt").glob("sources.list"),
+            *Path("/etc/apt/sources.list.d").glob("*"),
+        ]
+        if path.is_file()
+    )
     # deb822 stanzas (URIs: before Suites:, no blank line between) or one-line entries
-    for pattern in (r"^URIs:\s*(\S+)[^\n]*\n(?:[^\n]+\n)*?"
-                    r"Suites:(?:[ \t]+\S+)*?[ \t]+%s[ \t]*(?:\s|$)",
-                    r"^deb\s+(?:\[[^\]]*\]\s+)?(\S+)\s+%s\s"):
+    for pattern in (
+        r"^URIs:\s*(\S+)[^\n]*\n(?:[^\n]+\n)*?"
+        r"Suites:(?:[ \t]+\S+)*?[ \t]+%s[ \t]*(?:\s|$)",
+        r"^deb\s+(?:\[[^\]]*\]\s+)?(\S+)\s+%s\s",
+    ):
         match = re.search(pattern % suite[1], sources, re.M)
         if match:
             return suite[1], match[1]
@@ -156,8 +168,15 @@ def base_tarball() -> Path:
         raise EngineUnavailable("debootstrap is not installed (scripts/setup.sh installs it)")
     with tempfile.TemporaryDirectory(dir=cache_dir()) as scratch:
         root = Path(scratch) / "root"
-        run(debootstrap, "--variant=minbase", f"--include={','.join(BASE_PACKAGES)}", suite,
-            str(root), mirror, timeout_s=1200)
+        run(
+            debootstrap,
+            "--variant=minbase",
+            f"--include={','.join(BASE_PACKAGES)}",
+            suite,
+            str(root),
+            mirror,
+            timeout_s=1200,
+        )
         for leftovers in ("var/cache/apt/archives", "var/lib/apt/lists"):
             for item in (root / leftovers).glob("*"):
                 if item.is_file():
@@ -183,18 +202,36 @@ def build_bases() -> tuple[str, str]:
     if not image_exists(NODE_IMAGE):
         version = node_version()
         if version is None or version < NODE_MIN_VERSION:
-            raise EngineUnavailable(f"the dashboard build needs Node.js >= "
-                                    f"{'.'.join(map(str, NODE_MIN_VERSION))}, found {version}")
+            raise EngineUnavailable(
+                f"the dashboard build needs Node.js >= "
+                f"{'.'.join(map(str, NODE_MIN_VERSION))}, found {version}"
+            )
         node = Path(shutil.which("node") or "").resolve()
         npm_root = Path(run("npm", "root", "-g").stdout.strip())
         with tempfile.TemporaryDirectory() as context:
-            run("tar", "-C", "/", "-cf", f"{context}/node.tar", str(node)[1:],
-                str(npm_root / "npm")[1:])
+            run(
+                "tar",
+                "-C",
+                "/",
+                "-cf",
+                f"{context}/node.tar",
+                str(node)[1:],
+                str(npm_root / "npm")[1:],
+            )
             Path(context, "Dockerfile").write_text(
                 f"FROM {BASE_IMAGE}\nADD node.tar /\nENV PATH={node.parent}:$PATH\n"
-                f"RUN ln -sf {npm_root}/npm/bin/npm-cli.js /usr/local/bin/npm\n")
-            run("docker", "build", "--network", "host", "-t", NODE_IMAGE, context,
-                env={**os.environ, "DOCKER_BUILDKIT": "0"})
+                f"RUN ln -sf {npm_root}/npm/bin/npm-cli.js /usr/local/bin/npm\n"
+            )
+            run(
+                "docker",
+                "build",
+                "--network",
+                "host",
+                "-t",
+                NODE_IMAGE,
+                context,
+                env={**os.environ, "DOCKER_BUILDKIT": "0"},
+            )
     return BASE_IMAGE, NODE_IMAGE
 
 
@@ -203,10 +240,14 @@ def build_bases() -> tuple[str, str]:
 
 def context_files() -> list[str]:
     """The checkout's files (tracked or new, not git-ignored) a compose build could read."""
-    listed = run("git", "ls-files", "--cached", "--others", "--exclude-standard", "-z",
-                 cwd=REPO_ROOT).stdout.split("\0")
-    return [name for name in listed if name and not name.startswith(CONTEXT_EXCLUDED)
-            and (REPO_ROOT / name).is_file()]
+    listed = run(
+        "git", "ls-files", "--cached", "--others", "--exclude-standard", "-z", cwd=REPO_ROOT
+    ).stdout.split("\0")
+    return [
+        name
+        for name in listed
+        if name and not name.startswith(CONTEXT_EXCLUDED) and (REPO_ROOT / name).is_file()
+    ]
 
 
 def pip_settings() -> dict[str, str]:
@@ -217,21 +258,29 @@ def pip_settings() -> dict[str, str]:
         key, _, value = line.partition("=")
         name = key.rsplit(".", 1)[-1]
         if name in ("index-url", "extra-index-url", "trusted-host", "timeout", "default-timeout"):
-            urls = [v for v in value.strip("'\"").split() if "://" not in v
-                    or v.startswith(("http://", "https://"))]
+            urls = [
+                v
+                for v in value.strip("'\"").split()
+                if "://" not in v or v.startswith(("http://", "https://"))
+            ]
             if urls:
                 settings[name] = " ".join(urls)
-    for variable, name in (("PIP_INDEX_URL", "index-url"),
-                           ("PIP_EXTRA_INDEX_URL", "extra-index-url")):
+    for variable, name in (
+        ("PIP_INDEX_URL", "index-url"),
+        ("PIP_EXTRA_INDEX_URL", "extra-index-url"),
+    ):
         if os.environ.get(variable, "").startswith(("http://", "https://")):
             settings[name] = os.environ[variable]
     return settings
 
 
 def ca_bundle() -> Path | None:
-    for candidate in (os.environ.get("PIP_CERT"), os.environ.get("SSL_CERT_FILE"),
-                      ssl.get_default_verify_paths().cafile,
-                      "/etc/ssl/certs/ca-certificates.crt"):
+    for candidate in (
+        os.environ.get("PIP_CERT"),
+        os.environ.get("SSL_CERT_FILE"),
+        ssl.get_default_verify_paths().cafile,
+        "/etc/ssl/certs/ca-certificates.crt",
+    ):
         if candidate and Path(candidate).is_file():
             return Path(candidate)
     return None

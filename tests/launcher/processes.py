@@ -31,8 +31,18 @@ class UpProcess(Running):
     """``python -m clients.stack.up_cli --host 127.0.0.1 --port 0 ...`` and what it announced."""
 
     def __init__(self, *extra_args: str) -> None:
-        super().__init__([sys.executable, "-m", "clients.stack.up_cli", "--host", "127.0.0.1",
-                          "--port", "0", *extra_args])
+        super().__init__(
+            [
+                sys.executable,
+                "-m",
+                "clients.stack.up_cli",
+                "--host",
+                "127.0.0.1",
+                "--port",
+                "0",
+                *extra_args,
+            ]
+        )
 
     def wait_ready(self, timeout_s: float = STARTUP_TIMEOUT_S) -> str:
         """Wait for the ``connect to ws://HOST:PORT`` line; the URL."""
@@ -45,8 +55,9 @@ class UpProcess(Running):
         """The pid of each component, by title, from the ``[up] started ...`` lines."""
         with self._changed:
             lines = list(self.lines)
-        return {m.group("title"): int(m.group("pid"))
-                for line in lines if (m := _STARTED.search(line))}
+        return {
+            m.group("title"): int(m.group("pid")) for line in lines if (m := _STARTED.search(line))
+        }
 
 
 def wait_gone(pids: Sequence[int], timeout_s: float = 30.0) -> list[int]:

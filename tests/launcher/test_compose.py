@@ -47,8 +47,13 @@ HEALTHY_TIMEOUT_S = 180.0
 def compose_validator() -> list[str] | None:
     """`docker compose` (v2 plugin) if it works here, else `docker-compose`, else None."""
     docker = shutil.which("docker")
-    if docker and subprocess.run([docker, "compose", "version"], capture_output=True,
-                                 timeout=60).returncode == 0:
+    if (
+        docker
+        and subprocess.run(
+            [docker, "compose", "version"], capture_output=True, timeout=60
+        ).returncode
+        == 0
+    ):
         return [docker, "compose"]
     legacy = shutil.which("docker-compose")
     return [legacy] if legacy else None
@@ -59,8 +64,13 @@ VALIDATOR = compose_validator()
 
 def validate(path: Path) -> subprocess.CompletedProcess[str]:
     assert VALIDATOR is not None, "no compose validator: run scripts/setup.sh (docker-compose)"
-    return subprocess.run([*VALIDATOR, "-f", str(path), "config", "-q"], cwd=path.parent,
-                          capture_output=True, text=True, timeout=120)
+    return subprocess.run(
+        [*VALIDATOR, "-f", str(path), "config", "-q"],
+        cwd=path.parent,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
 
 
 @pytest.mark.parametrize("path", [COMPOSE_FILE, HOST_COMPOSE_FILE], ids=lambda p: p.name)
@@ -80,8 +90,13 @@ def test_the_validator_rejects_a_broken_copy(tmp_path: Path) -> None:
 
 def expected_commands(encoding: Literal["json", "cbor"]) -> dict[str, list[str]]:
     """What `riverbridge up` would run with the compose settings, with `python` as argv[0]."""
-    config = LaunchConfig(host="0.0.0.0", port=9090, encoding=encoding,
-                          sim_config=Path("/config/sim.toml"), nav_config=Path("/config/nav.toml"))
+    config = LaunchConfig(
+        host="0.0.0.0",
+        port=9090,
+        encoding=encoding,
+        sim_config=Path("/config/sim.toml"),
+        nav_config=Path("/config/nav.toml"),
+    )
     bridge, sim, nav = stack_components(config)
     commands = {"bridge": bridge, "simulator": sim, "navigation": nav}
     return {name: ["python", *c.argv("ws://bridge:9090")[1:]] for name, c in commands.items()}
@@ -124,9 +139,11 @@ def test_image_serves_the_dashboard_as_a_user_without_the_build_settings() -> No
     configuration (pip.conf, npmrc, CA bundle), and drops root."""
     image = dockerfile_stages()[""]
     copies = [line for line in image if line.startswith("COPY ")]
-    assert copies == ["COPY --from=install /opt/riverbridge /opt/riverbridge",
-                      "COPY --from=dashboard /web/dist /opt/riverbridge/web",
-                      "COPY config /config"]
+    assert copies == [
+        "COPY --from=install /opt/riverbridge /opt/riverbridge",
+        "COPY --from=dashboard /web/dist /opt/riverbridge/web",
+        "COPY config /config",
+    ]
     assert dockerfile_env()["RIVERBRIDGE_WEB_ROOT"] == "/opt/riverbridge/web"
     assert any(line.startswith("USER ") and line.split()[1] != "root" for line in image)
     assert image[-1].startswith("CMD ")
@@ -154,12 +171,17 @@ def test_host_network_file_is_the_compose_file_on_loopback() -> None:
         build = dict(moved.pop("build"))
         assert build.pop("network") == "host", name
         assert build == service["build"], name
-        expected = {key: value for key, value in service.items() if key not in ("ports",
-                                                                                "build")}
+        expected = {key: value for key, value in service.items() if key not in ("ports", "build")}
         as_local = {
             "command": localize(service["command"], port, Path("/config"), python="python"),
-            "healthcheck": {**service["healthcheck"], "test": ["CMD", *localize(
-                healthcheck_command(service), port, Path("/config"), python="python")]}}
+            "healthcheck": {
+                **service["healthcheck"],
+                "test": [
+                    "CMD",
+                    *localize(healthcheck_command(service), port, Path("/config"), python="python"),
+                ],
+            },
+        }
         assert moved == {**expected, **as_local}, name
 
 
@@ -173,20 +195,23 @@ def test_shipped_example_configs_load_as_the_defaults() -> None:
     assert load_nav(REPO_ROOT / "config" / "nav.toml") == NavigationConfig()
 
 
-def wait_healthy(name: str, command: list[str], env: dict[str, str],
-                 watched: list[Running]) -> None:
+def wait_healthy(
+    name: str, command: list[str], env: dict[str, str], watched: list[Running]
+) -> None:
     """Run ``command`` (a service's health check) until it exits 0, like docker does."""
     deadline = time.monotonic() + HEALTHY_TIMEOUT_S
     while True:
-        result = subprocess.run(command, cwd=REPO_ROOT, env=env, capture_output=True,
-                                text=True, timeout=120)
+        result = subprocess.run(
+            command, cwd=REPO_ROOT, env=env, capture_output=True, text=True, timeout=120
+        )
         if result.returncode == 0:
             return
         for process in watched:
             assert process.process.poll() is None, f"{process.argv} died:\n{process.text()}"
         assert time.monotonic() < deadline, (
             f"{name} not healthy after {HEALTHY_TIMEOUT_S} s: {result.stderr}\n"
-            + "\n".join(process.text() for process in watched))
+            + "\n".join(process.text() for process in watched)
+        )
         time.sleep(1.0)
 
 
@@ -208,22 +233,38 @@ async def test_compose_services_as_local_processes_make_a_working_pipeline() -> 
             service = SERVICES[name]
             env = service_env(service)
             started.append(Running(localize(service["command"], port, config_dir), env))
-            wait_healthy(name, localize(healthcheck_command(service), port, config_dir), env,
-                         started)
-        grid = await receive_one(f"ws://127.0.0.1:{port}", "/nav/obstacle_map",
-                                 "nav_msgs/msg/OccupancyGrid")
+            wait_healthy(
+                name, localize(healthcheck_command(service), port, config_dir), env, started
+            )
+        grid = await receive_one(
+            f"ws://127.0.0.1:{port}", "/nav/obstacle_map", "nav_msgs/msg/OccupancyGrid"
+        )
         assert grid["info"]["width"] > 0 and len(grid["data"]) > 0
     finally:
         codes = {process.argv[2]: process.stop() for process in reversed(started)}
     assert codes == {"bridge": 0, "simulator": 0, "navigation": 0}, "\n".join(
-        process.text() for process in started)
+        process.text() for process in started
+    )
 
 
 def test_localize_swaps_service_names_ports_and_config(tmp_path: Path) -> None:
-    words = ["python", "-m", "simulator", "--bridge", "ws://bridge:9090", "--config",
-             "/config/sim.toml"]
+    words = [
+        "python",
+        "-m",
+        "simulator",
+        "--bridge",
+        "ws://bridge:9090",
+        "--config",
+        "/config/sim.toml",
+    ]
     assert localize(words, 4242, tmp_path) == [
-        sys.executable, "-m", "simulator", "--bridge", "ws://127.0.0.1:4242", "--config",
-        str(tmp_path / "sim.toml")]
+        sys.executable,
+        "-m",
+        "simulator",
+        "--bridge",
+        "ws://127.0.0.1:4242",
+        "--config",
+        str(tmp_path / "sim.toml"),
+    ]
     bridge = ["python", "-m", "bridge", "--host", "0.0.0.0", "--port", "9090"]
     assert localize(bridge, 4242, tmp_path)[3:] == ["--host", "127.0.0.1", "--port", "4242"]

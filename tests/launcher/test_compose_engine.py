@@ -57,20 +57,26 @@ class Compose:
         self.folder, self.env = folder, env
         self.argv = [*compose_command(), "-f", "docker-compose.host.yml", "-p", PROJECT]
 
-    def __call__(self, *args: str, timeout_s: float = 300.0,
-                 check: bool = True) -> subprocess.CompletedProcess[str]:
-        return run(*self.argv, *args, cwd=self.folder, env=self.env, timeout_s=timeout_s,
-                   check=check)
+    def __call__(
+        self, *args: str, timeout_s: float = 300.0, check: bool = True
+    ) -> subprocess.CompletedProcess[str]:
+        return run(
+            *self.argv, *args, cwd=self.folder, env=self.env, timeout_s=timeout_s, check=check
+        )
 
     def health(self) -> dict[str, str]:
         """Service name -> docker's health status of its container."""
         ids = self("ps", "-q").stdout.split()
         if not ids:
             return {}
-        lines = run("docker", "inspect", "-f",
-                    '{{index .Config.Labels "com.docker.compose.service"}} '
-                    "{{if .State.Health}}{{.State.Health.Status}}{{else}}{{.State.Status}}{{end}}",
-                    *ids).stdout.splitlines()
+        lines = run(
+            "docker",
+            "inspect",
+            "-f",
+            '{{index .Config.Labels "com.docker.compose.service"}} '
+            "{{if .State.Health}}{{.State.Health.Status}}{{else}}{{.State.Status}}{{end}}",
+            *ids,
+        ).stdout.splitlines()
         return dict(line.split(maxsplit=1) for line in lines if line.strip())
 
     def wait_healthy(self) -> None:
@@ -89,8 +95,9 @@ def fetch(url: str) -> tuple[str, bytes]:
         return response.headers.get("Content-Type", ""), response.read()
 
 
-def receive_with_roslibpy(port: int, topics: dict[str, str], timeout_s: float = 60.0
-                          ) -> dict[str, dict]:
+def receive_with_roslibpy(
+    port: int, topics: dict[str, str], timeout_s: float = 60.0
+) -> dict[str, dict]:
     """One message of each topic through the real roslibpy client."""
     import roslibpy
     from compat.roslibpy_support import close, connect
@@ -103,6 +110,7 @@ def receive_with_roslibpy(port: int, topics: dict[str, str], timeout_s: float = 
             received.setdefault(topic, msg)
             if len(received) == len(topics):
                 done.set()
+
         return callback
 
     ros = connect("127.0.0.1", port)
@@ -133,8 +141,11 @@ def check_metrics(port: int) -> None:
 
     _, body = fetch(f"http://127.0.0.1:{port}/metrics")
     families = {f.name: f for f in text_string_to_metric_families(body.decode("utf-8"))}
-    received = {s.labels["topic"]: s.value for s in families["riverbridge_messages"].samples
-                if s.labels.get("direction") == "in"}
+    received = {
+        s.labels["topic"]: s.value
+        for s in families["riverbridge_messages"].samples
+        if s.labels.get("direction") == "in"
+    }
     assert received.get("/imu/data", 0) > 0, received
     assert families["process_cpu_seconds"].samples[0].value > 0
 
@@ -143,9 +154,18 @@ def check_image() -> None:
     """The image runs as its own user and holds none of the build settings."""
     user = run("docker", "image", "inspect", "-f", "{{.Config.User}}", IMAGE).stdout.strip()
     assert user == "riverbridge", user
-    inside = run("docker", "run", "--rm", "--network", "none", IMAGE, "sh", "-c",
-                 "id -u; ls -d /build-config /opt/riverbridge/web/index.html 2>&1",
-                 check=False).stdout
+    inside = run(
+        "docker",
+        "run",
+        "--rm",
+        "--network",
+        "none",
+        IMAGE,
+        "sh",
+        "-c",
+        "id -u; ls -d /build-config /opt/riverbridge/web/index.html 2>&1",
+        check=False,
+    ).stdout
     uid, *listing = inside.splitlines()
     assert uid != "0" and "/opt/riverbridge/web/index.html" in listing, inside
     assert "/build-config" not in listing, inside
@@ -161,8 +181,13 @@ def test_compose_up_builds_runs_and_serves_the_stack(engine: None, tmp_path: Pat
         pytest.skip(str(exc))
     timings["bases"] = time.monotonic() - start
     port = free_port()
-    env = {**os.environ, "RIVERBRIDGE_PORT": str(port), "RIVERBRIDGE_BASE_IMAGE": base,
-           "RIVERBRIDGE_NODE_IMAGE": node, "DOCKER_BUILDKIT": "0"}
+    env = {
+        **os.environ,
+        "RIVERBRIDGE_PORT": str(port),
+        "RIVERBRIDGE_BASE_IMAGE": base,
+        "RIVERBRIDGE_NODE_IMAGE": node,
+        "DOCKER_BUILDKIT": "0",
+    }
     compose = Compose(make_context(tmp_path / "riverbridge"), env)
     compose("down", "--remove-orphans", check=False)  # leftovers of an interrupted run
     try:
@@ -170,15 +195,29 @@ def test_compose_up_builds_runs_and_serves_the_stack(engine: None, tmp_path: Pat
         compose("up", "--build", "-d", timeout_s=UP_TIMEOUT_S)
         compose.wait_healthy()
         timings["up_healthy"] = time.monotonic() - mark
-        received = receive_with_roslibpy(port, {"/imu/data": "sensor_msgs/msg/Imu",
-                                                "/nav/boxes": "riverbridge_msgs/msg/BoxArray"})
+        received = receive_with_roslibpy(
+            port,
+            {"/imu/data": "sensor_msgs/msg/Imu", "/nav/boxes": "riverbridge_msgs/msg/BoxArray"},
+        )
         assert set(received) == {"/imu/data", "/nav/boxes"}, received.keys()
         assert received["/imu/data"]["header"]["frame_id"]
         mark = time.monotonic()
         report = subprocess.run(
-            [sys.executable, str(REPO_ROOT / "riverbridge.py"), "report", "--bridge",
-             f"ws://127.0.0.1:{port}", "--duration", "10"], cwd=REPO_ROOT, env=repo_env(),
-            capture_output=True, text=True, timeout=300)
+            [
+                sys.executable,
+                str(REPO_ROOT / "riverbridge.py"),
+                "report",
+                "--bridge",
+                f"ws://127.0.0.1:{port}",
+                "--duration",
+                "10",
+            ],
+            cwd=REPO_ROOT,
+            env=repo_env(),
+            capture_output=True,
+            text=True,
+            timeout=300,
+        )
         timings["report"] = time.monotonic() - mark
         assert report.returncode == 0, report.stdout + report.stderr
         for topic in ("/lidar/points", "/imu/data", "/radar/image"):
@@ -196,5 +235,7 @@ def test_compose_up_builds_runs_and_serves_the_stack(engine: None, tmp_path: Pat
         compose("down", "--remove-orphans", check=False, timeout_s=120)
         timings["down"] = time.monotonic() - mark
         timings["total"] = time.monotonic() - start
-        print("compose engine test timings (s): "
-              + ", ".join(f"{name} {value:.1f}" for name, value in timings.items()))
+        print(
+            "compose engine test timings (s): "
+            + ", ".join(f"{name} {value:.1f}" for name, value in timings.items())
+        )

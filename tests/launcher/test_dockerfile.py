@@ -30,10 +30,14 @@ def ignored(relative: Path, patterns: list[str]) -> bool:
         anywhere = pattern.startswith("**/")
         wanted = pattern.removeprefix("**/").split("/")
         starts = range(len(parts)) if anywhere else range(1)
-        if any(len(parts) - start >= len(wanted) and all(
+        if any(
+            len(parts) - start >= len(wanted)
+            and all(
                 fnmatch.fnmatch(part, want)
-                for part, want in zip(parts[start:start + len(wanted)], wanted, strict=True))
-               for start in starts):
+                for part, want in zip(parts[start : start + len(wanted)], wanted, strict=True)
+            )
+            for start in starts
+        ):
             return True
     return False
 
@@ -55,8 +59,11 @@ def build_context(target: Path) -> None:
 def source_packages() -> list[str]:
     """Dotted names of the checkout's packages and subpackages (folders with __init__.py)."""
     tops = ("bridge", "clients", "navigation", "schemas", "simulator")
-    return sorted(".".join(init.parent.relative_to(REPO_ROOT).parts)
-                  for top in tops for init in (REPO_ROOT / top).rglob("__init__.py"))
+    return sorted(
+        ".".join(init.parent.relative_to(REPO_ROOT).parts)
+        for top in tops
+        for init in (REPO_ROOT / top).rglob("__init__.py")
+    )
 
 
 def run(*argv: str, cwd: Path, env: dict[str, str]) -> subprocess.CompletedProcess[str]:
@@ -77,38 +84,76 @@ def test_dockerignore_keeps_sources_and_drops_caches() -> None:
 
 
 def test_the_image_install_step_yields_a_working_package(tmp_path: Path) -> None:
-    context, wheels, site, elsewhere = (tmp_path / name for name in
-                                        ("context", "wheels", "site", "elsewhere"))
+    context, wheels, site, elsewhere = (
+        tmp_path / name for name in ("context", "wheels", "site", "elsewhere")
+    )
     for folder in (context, elsewhere):
         folder.mkdir()
     build_context(context)
-    env = {"PATH": "/usr/bin:/bin", "PYTHONPATH": str(site), "PYTHONNOUSERSITE": "1",
-           "PYTHONUNBUFFERED": "1"}
+    env = {
+        "PATH": "/usr/bin:/bin",
+        "PYTHONPATH": str(site),
+        "PYTHONNOUSERSITE": "1",
+        "PYTHONUNBUFFERED": "1",
+    }
     pip = [sys.executable, "-m", "pip", "--disable-pip-version-check"]
     # With build isolation, as `pip install .` in the image: pip fetches the build backend
     # pyproject.toml asks for (setuptools>=68, wheel) from PyPI.
-    run(*pip, "wheel", "--no-deps", "--wheel-dir", str(wheels), str(context), cwd=elsewhere,
-        env={**env, "PYTHONPATH": ""})
-    run(*pip, "install", "--no-deps", "--target", str(site), *map(str, wheels.glob("*.whl")),
-        cwd=elsewhere, env=env)
+    run(
+        *pip,
+        "wheel",
+        "--no-deps",
+        "--wheel-dir",
+        str(wheels),
+        str(context),
+        cwd=elsewhere,
+        env={**env, "PYTHONPATH": ""},
+    )
+    run(
+        *pip,
+        "install",
+        "--no-deps",
+        "--target",
+        str(site),
+        *map(str, wheels.glob("*.whl")),
+        cwd=elsewhere,
+        env=env,
+    )
     # Every package and subpackage of the checkout must come from the installation: the
     # shared editable install would otherwise supply a subpackage the wheel left out.
     packages = ["riverbridge", *source_packages()]
-    probe = ("import importlib, sys\n"
-             "from schemas.registry import TypeRegistry\n"
-             "for name in sys.argv[1:]:\n"
-             "    print(importlib.import_module(name).__file__)\n"
-             "TypeRegistry.with_defaults().message('riverbridge_msgs/msg/RadarImage')\n")
+    probe = (
+        "import importlib, sys\n"
+        "from schemas.registry import TypeRegistry\n"
+        "for name in sys.argv[1:]:\n"
+        "    print(importlib.import_module(name).__file__)\n"
+        "TypeRegistry.with_defaults().message('riverbridge_msgs/msg/RadarImage')\n"
+    )
     located = run(sys.executable, "-c", probe, *packages, cwd=elsewhere, env=env).stdout.split()
-    outside = [(name, path) for name, path in zip(packages, located, strict=True)
-               if not path.startswith(str(site))]
+    outside = [
+        (name, path)
+        for name, path in zip(packages, located, strict=True)
+        if not path.startswith(str(site))
+    ]
     assert len(located) == len(packages) and not outside, outside
-    bridge = Running([sys.executable, "-m", "bridge", "--host", "127.0.0.1", "--port", "0"],
-                     env=env, cwd=elsewhere)
+    bridge = Running(
+        [sys.executable, "-m", "bridge", "--host", "127.0.0.1", "--port", "0"],
+        env=env,
+        cwd=elsewhere,
+    )
     try:
         port = bridge.wait_for_line(r"listening on ws://127\.0\.0\.1:(?P<port>\d+)")["port"]
-        run(sys.executable, "-m", "clients.stack.healthcheck", "--bridge", f"ws://127.0.0.1:{port}",
-            "--topic", "/rosout", cwd=elsewhere, env=env)
+        run(
+            sys.executable,
+            "-m",
+            "clients.stack.healthcheck",
+            "--bridge",
+            f"ws://127.0.0.1:{port}",
+            "--topic",
+            "/rosout",
+            cwd=elsewhere,
+            env=env,
+        )
         assert bridge.stop() == 0, bridge.text()
     finally:
         bridge.kill_session()

@@ -30,8 +30,14 @@ def bridge_url() -> Iterator[str]:
 
 
 def healthcheck(*args: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([sys.executable, "-m", "clients.stack.healthcheck", *args], cwd=REPO_ROOT,
-                          env=repo_env(), capture_output=True, text=True, timeout=120)
+    return subprocess.run(
+        [sys.executable, "-m", "clients.stack.healthcheck", *args],
+        cwd=REPO_ROOT,
+        env=repo_env(),
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
 
 
 def test_a_listening_bridge_is_healthy(bridge_url: str) -> None:

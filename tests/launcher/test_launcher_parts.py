@@ -25,16 +25,46 @@ from clients.stack.launcher import (
 
 
 def test_stack_is_bridge_then_simulator_then_navigation_with_their_options() -> None:
-    config = LaunchConfig(host="0.0.0.0", port=9191, encoding="json",
-                          sim_config=Path("/c/sim.toml"), nav_config=Path("/c/nav.toml"))
+    config = LaunchConfig(
+        host="0.0.0.0",
+        port=9191,
+        encoding="json",
+        sim_config=Path("/c/sim.toml"),
+        nav_config=Path("/c/nav.toml"),
+    )
     bridge, sim, nav = stack_components(config)
     url = "ws://127.0.0.1:9191"
-    assert bridge.argv(url) == [sys.executable, "-m", "bridge", "--host", "0.0.0.0",
-                                "--port", "9191"]
-    assert sim.argv(url) == [sys.executable, "-m", "simulator", "--bridge", url,
-                             "--encoding", "json", "--config", "/c/sim.toml"]
-    assert nav.argv(url) == [sys.executable, "-m", "navigation", "--bridge", url,
-                             "--encoding", "json", "--config", "/c/nav.toml"]
+    assert bridge.argv(url) == [
+        sys.executable,
+        "-m",
+        "bridge",
+        "--host",
+        "0.0.0.0",
+        "--port",
+        "9191",
+    ]
+    assert sim.argv(url) == [
+        sys.executable,
+        "-m",
+        "simulator",
+        "--bridge",
+        url,
+        "--encoding",
+        "json",
+        "--config",
+        "/c/sim.toml",
+    ]
+    assert nav.argv(url) == [
+        sys.executable,
+        "-m",
+        "navigation",
+        "--bridge",
+        url,
+        "--encoding",
+        "json",
+        "--config",
+        "/c/nav.toml",
+    ]
     assert (sim.topics, nav.topics, bridge.topics) == (SIMULATOR_TOPICS, NAVIGATION_TOPICS, ())
 
 
@@ -53,11 +83,18 @@ def test_children_get_unbuffered_output_and_malloc_tuning_over_the_base_env() ->
     assert env["MALLOC_TOP_PAD_"] == str(64 * 2**20)
 
 
-@pytest.mark.parametrize(("host", "expected"), [
-    ("0.0.0.0", "127.0.0.1"), ("::", "::1"), ("127.0.0.1", "127.0.0.1"), ("10.1.2.3", "10.1.2.3"),
-])
-def test_clients_connect_to_loopback_when_the_bridge_binds_a_wildcard(host: str,
-                                                                     expected: str) -> None:
+@pytest.mark.parametrize(
+    ("host", "expected"),
+    [
+        ("0.0.0.0", "127.0.0.1"),
+        ("::", "::1"),
+        ("127.0.0.1", "127.0.0.1"),
+        ("10.1.2.3", "10.1.2.3"),
+    ],
+)
+def test_clients_connect_to_loopback_when_the_bridge_binds_a_wildcard(
+    host: str, expected: str
+) -> None:
     assert connect_host(host) == expected
 
 
@@ -69,7 +106,8 @@ def test_ipv6_urls_are_bracketed() -> None:
 def test_exit_descriptions_name_the_component_and_code_or_signal() -> None:
     assert describe_exit("simulator", 3) == "simulator exited with code 3"
     assert describe_exit("simulator", -int(signal.SIGKILL)) == (
-        "simulator was killed by SIGKILL (exit code -9)")
+        "simulator was killed by SIGKILL (exit code -9)"
+    )
 
 
 def test_version_url_follows_the_websocket_address() -> None:

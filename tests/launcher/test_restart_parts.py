@@ -17,10 +17,18 @@ from clients.stack.restarts import (
 from schemas.supervision import restart_counts, restarts_msg
 
 
-@pytest.mark.parametrize(("mode", "code", "restarted"), [
-    ("on-failure", 1, True), ("on-failure", -9, True), ("on-failure", 0, False),
-    ("always", 0, True), ("always", -9, True), ("never", -9, False), ("never", 1, False),
-])
+@pytest.mark.parametrize(
+    ("mode", "code", "restarted"),
+    [
+        ("on-failure", 1, True),
+        ("on-failure", -9, True),
+        ("on-failure", 0, False),
+        ("always", 0, True),
+        ("always", -9, True),
+        ("never", -9, False),
+        ("never", 1, False),
+    ],
+)
 def test_policy(mode, code, restarted):
     assert RestartPolicy(mode).restarts(code) is restarted
 
@@ -52,5 +60,6 @@ def test_metrics_show_restarts_per_component():
     families = {f.name: f for f in text_string_to_metric_families(text)}
     restarts = families["riverbridge_component_restarts"]
     assert restarts.type == "counter"
-    assert {s.labels["component"]: s.value for s in restarts.samples
-            if s.name.endswith("_total")} == {"simulator": 2.0, "bridge": 0.0}
+    assert {
+        s.labels["component"]: s.value for s in restarts.samples if s.name.endswith("_total")
+    } == {"simulator": 2.0, "bridge": 0.0}

@@ -57,12 +57,18 @@ def bridge_and_navigation(config: LaunchConfig = CONFIG) -> list[Component]:
 class Harness:
     """A supervisor running as a task, with its ready URL and a stop switch."""
 
-    def __init__(self, components: list[Component], config: LaunchConfig,
-                 stream: io.StringIO) -> None:
+    def __init__(
+        self, components: list[Component], config: LaunchConfig, stream: io.StringIO
+    ) -> None:
         self.stop = asyncio.Event()
         self.ready: asyncio.Future[str] = asyncio.get_running_loop().create_future()
-        self.supervisor = Supervisor(components, config, PrefixedOutput(stream),
-                                     env=repo_env(), on_ready=self.ready.set_result)
+        self.supervisor = Supervisor(
+            components,
+            config,
+            PrefixedOutput(stream),
+            env=repo_env(),
+            on_ready=self.ready.set_result,
+        )
         self.task = asyncio.create_task(self.supervisor.run(self.stop))
 
     def pids(self) -> list[int]:
@@ -108,7 +114,8 @@ async def test_a_dying_component_stops_the_rest_and_is_named(output: io.StringIO
 
 
 async def test_a_component_that_never_gets_ready_times_out_naming_the_topic(
-        output: io.StringIO) -> None:
+    output: io.StringIO,
+) -> None:
     config = CONFIG.model_copy(update={"startup_timeout_s": 20.0})
     bridge, nav = bridge_and_navigation(config)
     never = replace(nav, topics=(*nav.topics, "/never/published"))
@@ -132,17 +139,21 @@ async def test_a_bridge_that_cannot_listen_is_reported(output: io.StringIO) -> N
     assert len(harness.pids()) == 1  # navigation was never started
 
 
-async def restart_counts_in_metrics(url: str, wanted: dict[str, int],
-                                    timeout_s: float = 60.0) -> str:
+async def restart_counts_in_metrics(
+    url: str, wanted: dict[str, int], timeout_s: float = 60.0
+) -> str:
     """GET /metrics until it shows `wanted` restarts per component; the page."""
     metrics_url = url.replace("ws://", "http://") + "/metrics"
     deadline = asyncio.get_running_loop().time() + timeout_s
     while True:
         with contextlib.suppress(OSError):
             page = await asyncio.to_thread(
-                lambda: urllib.request.urlopen(metrics_url, timeout=5).read().decode())
-            if all(f'riverbridge_component_restarts_total{{component="{c}"}} {float(n)}' in page
-                   for c, n in wanted.items()):
+                lambda: urllib.request.urlopen(metrics_url, timeout=5).read().decode()
+            )
+            if all(
+                f'riverbridge_component_restarts_total{{component="{c}"}} {float(n)}' in page
+                for c, n in wanted.items()
+            ):
                 return page
         assert asyncio.get_running_loop().time() < deadline, f"no {wanted} in /metrics"
         await asyncio.sleep(0.5)
@@ -161,8 +172,10 @@ async def test_killed_components_are_restarted_counted_and_work(output: io.Strin
     harness.stop.set()
     assert await harness.finish() == 0, output.getvalue()
     text = output.getvalue()
-    assert "navigation was killed by SIGKILL (exit code -9); restarting it in 0.25 s (restart 1)" \
+    assert (
+        "navigation was killed by SIGKILL (exit code -9); restarting it in 0.25 s (restart 1)"
         in text
+    )
     assert "bridge was killed by SIGKILL (exit code -9); restarting it in 0.25 s" in text
     assert wait_gone(harness.pids()) == []
 
@@ -178,7 +191,8 @@ async def _respawned(harness: Harness, title: str, old_pid: int) -> int:
 
 @pytest.mark.parametrize("when", ["waiting to restart", "just restarted"])
 async def test_a_stop_during_a_restart_exits_0_leaving_no_process(
-        output: io.StringIO, when: str) -> None:
+    output: io.StringIO, when: str
+) -> None:
     """A user's stop is a clean stop even while a component is being restarted: during the
     backoff delay, or while the new process is still starting (its imports, before it handles
     SIGINT itself)."""
@@ -199,12 +213,14 @@ async def test_a_stop_during_a_restart_exits_0_leaving_no_process(
 
 
 async def test_a_serving_component_that_dies_of_the_stop_signal_is_an_unclean_stop(
-        output: io.StringIO) -> None:
+    output: io.StringIO,
+) -> None:
     """Only a component still starting may end by the SIGINT that stops it: one that serves
     must handle it (exit 0), or `up` says so and exits 1."""
     bridge, _ = bridge_and_navigation()
-    harness = Harness([bridge, Component("raw", "raw", "tests.launcher.no_sigint_handler", ())],
-                      CONFIG, output)
+    harness = Harness(
+        [bridge, Component("raw", "raw", "tests.launcher.no_sigint_handler", ())], CONFIG, output
+    )
     await asyncio.wait_for(asyncio.shield(harness.ready), 180.0)
     harness.stop.set()
     assert await harness.finish() == 1

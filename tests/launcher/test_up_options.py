@@ -32,8 +32,9 @@ from .processes import REPO_ROOT, repo_env
         (["--max-clients", "0"], "--max-clients"),
     ],
 )
-def test_bad_option_exits_2_naming_it(argv: list[str], option: str,
-                                      capsys: pytest.CaptureFixture[str]) -> None:
+def test_bad_option_exits_2_naming_it(
+    argv: list[str], option: str, capsys: pytest.CaptureFixture[str]
+) -> None:
     with pytest.raises(SystemExit) as exited:
         up_cli.main(argv)
     assert exited.value.code == 2
@@ -44,7 +45,12 @@ def test_missing_config_file_through_the_real_command_line() -> None:
     """Started as users start it; nothing is launched, the message names option and file."""
     result = subprocess.run(
         [sys.executable, "-m", "clients.stack.up_cli", "--nav-config", "missing-nav.toml"],
-        cwd=REPO_ROOT, env=repo_env(), capture_output=True, text=True, timeout=120)
+        cwd=REPO_ROOT,
+        env=repo_env(),
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert result.returncode == 2
     assert "--nav-config" in result.stderr and "missing-nav.toml" in result.stderr
     assert "started" not in result.stdout
@@ -55,11 +61,32 @@ def test_options_become_the_launch_config(tmp_path) -> None:
     sim_toml.write_text("")
     nav_toml.write_text("")
     args = up_cli.build_parser().parse_args(
-        ["--host", "0.0.0.0", "--port", "0", "--encoding", "json", "--sim-config", str(sim_toml),
-         "--nav-config", str(nav_toml), "--startup-timeout", "30", "--stop-timeout", "2.5"])
+        [
+            "--host",
+            "0.0.0.0",
+            "--port",
+            "0",
+            "--encoding",
+            "json",
+            "--sim-config",
+            str(sim_toml),
+            "--nav-config",
+            str(nav_toml),
+            "--startup-timeout",
+            "30",
+            "--stop-timeout",
+            "2.5",
+        ]
+    )
     assert up_cli.config_from_args(args) == LaunchConfig(
-        host="0.0.0.0", port=0, encoding="json", sim_config=sim_toml.resolve(),
-        nav_config=nav_toml.resolve(), startup_timeout_s=30.0, stop_timeout_s=2.5)
+        host="0.0.0.0",
+        port=0,
+        encoding="json",
+        sim_config=sim_toml.resolve(),
+        nav_config=nav_toml.resolve(),
+        startup_timeout_s=30.0,
+        stop_timeout_s=2.5,
+    )
 
 
 def test_defaults_are_rosbridges_port_on_loopback_with_cbor() -> None:
@@ -76,18 +103,40 @@ def test_access_options_reach_the_bridge_and_the_clients(tmp_path) -> None:
     for path in (secret, cert, key):
         path.write_text("x\n")
     args = up_cli.build_parser().parse_args(
-        ["--auth-secret-file", str(secret), "--certfile", str(cert), "--keyfile", str(key),
-         "--allowed-origins", "https://*.example.org", "--max-clients", "20",
-         "--restart", "always"])
+        [
+            "--auth-secret-file",
+            str(secret),
+            "--certfile",
+            str(cert),
+            "--keyfile",
+            str(key),
+            "--allowed-origins",
+            "https://*.example.org",
+            "--max-clients",
+            "20",
+            "--restart",
+            "always",
+        ]
+    )
     config = up_cli.config_from_args(args)
     assert config.restart == "always" and config.scheme == "wss"
     bridge = stack_components(config)[0]
     assert bridge.args[4:] == (
-        "--auth-secret-file", str(secret.resolve()), "--certfile", str(cert.resolve()),
-        "--keyfile", str(key.resolve()), "--allowed-origins", "https://*.example.org",
-        "--max-clients", "20")
-    assert access_environment(config) == {AUTH_SECRET_ENV: str(secret.resolve()),
-                                          "SSL_CERT_FILE": str(cert.resolve())}
+        "--auth-secret-file",
+        str(secret.resolve()),
+        "--certfile",
+        str(cert.resolve()),
+        "--keyfile",
+        str(key.resolve()),
+        "--allowed-origins",
+        "https://*.example.org",
+        "--max-clients",
+        "20",
+    )
+    assert access_environment(config) == {
+        AUTH_SECRET_ENV: str(secret.resolve()),
+        "SSL_CERT_FILE": str(cert.resolve()),
+    }
 
 
 def test_restart_defaults_to_on_failure() -> None:

@@ -1,5 +1,4 @@
-"""`python -m clients.stack.up_cli` as users run it: three processes, a roslibpy client, shutdown.
-"""
+"""`python -m clients.stack.up_cli` as users run it: three processes, roslibpy, a clean shutdown."""
 
 from __future__ import annotations
 
@@ -135,8 +134,7 @@ class Recovery:
     imu_back_s: float  # kill -> first IMU sample stamped after the kill, at a client
 
 
-async def imu_recovery_after_kills(up: UpProcess,
-                                   titles: tuple[str, ...]) -> dict[str, Recovery]:
+async def imu_recovery_after_kills(up: UpProcess, titles: tuple[str, ...]) -> dict[str, Recovery]:
     """Kill -9 each component in turn; when it was respawned, and when an IMU sample stamped
     after the kill arrived at an ordinary (reconnecting) client."""
     arrivals: list[tuple[float, float]] = []  # (received, header stamp), wall-clock seconds
@@ -202,15 +200,22 @@ def test_a_secured_stack_authenticates_its_parts_over_tls(tmp_path: Path) -> Non
     pair = make_certificate(tmp_path)
     secret = tmp_path / "secret.txt"
     secret.write_text("0123456789abcdef\n")
-    args = ("--auth-secret-file", str(secret), "--certfile", str(pair.certfile),
-            "--keyfile", str(pair.keyfile))
+    args = (
+        "--auth-secret-file",
+        str(secret),
+        "--certfile",
+        str(pair.certfile),
+        "--keyfile",
+        str(pair.keyfile),
+    )
     with running_up(*args) as up:
         url = up.wait_ready()
         assert url.startswith("wss://127.0.0.1:")
 
         async def check() -> tuple[dict, dict]:
-            trusted = TransportConfig(auth_secret=SecretStr("0123456789abcdef"),
-                                      cafile=pair.certfile)
+            trusted = TransportConfig(
+                auth_secret=SecretStr("0123456789abcdef"), cafile=pair.certfile
+            )
             async with RosbridgeClient(url, encoding="cbor", transport=trusted) as client:
                 sub = await client.subscribe("/imu/data", "sensor_msgs/msg/Imu")
                 async with asyncio.timeout(60):

@@ -35,7 +35,8 @@ def test_measured_false_alarm_rate_matches_the_configured_one(kind, pfa, axis):
     sigma yet catches a wrong factor (a 10 % factor error moves P_fa by 20 % or more)."""
     config = CfarConfig(detector=kind, false_alarm_rate=pfa, **AXES[axis])
     assert measured_false_alarm_rate(CfarDetector.from_config(config)) == pytest.approx(
-        pfa, rel=0.08)
+        pfa, rel=0.08
+    )
 
 
 @pytest.mark.parametrize("kind", DETECTORS)
@@ -58,7 +59,8 @@ def test_injected_targets_are_detected(kind, axis):
     cells = rng.integers(0, CELLS, 40)
     image[beams, cells] = 100.0  # thesis 4.1: targets given a reflection of about 100
     detector = CfarDetector.from_config(
-        CfarConfig(detector=kind, false_alarm_rate=1e-3, **AXES[axis]))
+        CfarConfig(detector=kind, false_alarm_rate=1e-3, **AXES[axis])
+    )
     hits, threshold = detector.detect(image)
     assert hits[beams, cells].all()
     assert np.all(threshold[beams, cells] < 100.0)
@@ -136,12 +138,15 @@ def test_os_rank_defaults_to_three_quarters():
     assert CfarDetector.from_config(CfarConfig(detector="os", os_rank=10)).rank == 10
 
 
-@pytest.mark.parametrize(("config", "shape", "names"), [
-    # table 4.2's window along range on the simulator's 25 range cells (thesis table 4.1)
-    ({"axis": "range", "training_cells_per_side": 50}, (72, 25), "111 range cells"),
-    # the default ring window on a radar of 10 deg beams
-    ({}, (36, 25), "71 beams"),
-])
+@pytest.mark.parametrize(
+    ("config", "shape", "names"),
+    [
+        # table 4.2's window along range on the simulator's 25 range cells (thesis table 4.1)
+        ({"axis": "range", "training_cells_per_side": 50}, (72, 25), "111 range cells"),
+        # the default ring window on a radar of 10 deg beams
+        ({}, (36, 25), "71 beams"),
+    ],
+)
 def test_a_window_that_does_not_fit_is_an_error_naming_the_fields(config, shape, names):
     detector = CfarDetector.from_config(CfarConfig(**config))
     with pytest.raises(CfarWindowError, match=r"cfar\.training_cells_per_side") as error:

@@ -161,9 +161,12 @@ async def test_sensor_data_in_navigation_outputs_out(bridge_url, peer):
         imu = {kv["key"]: kv["value"] for kv in diagnostics["status"][0]["values"]}
         assert float(imu["rate_hz"]) == pytest.approx(100.0, rel=0.01)
         assert imu["gaps"] == "0"
-        subscribers = {topic: set((await peer.call_service(
-            "/rosapi/subscribers", {"topic": topic}))["subscribers"])
-            for topic in ("/imu/data", "/lidar/points")}
+        subscribers = {
+            topic: set(
+                (await peer.call_service("/rosapi/subscribers", {"topic": topic}))["subscribers"]
+            )
+            for topic in ("/imu/data", "/lidar/points")
+        }
         # The IMU has a connection of its own: it never waits on the wire behind a scan.
         assert len(subscribers["/imu/data"]) == len(subscribers["/lidar/points"]) == 1
         assert subscribers["/imu/data"] != subscribers["/lidar/points"]
@@ -206,8 +209,9 @@ async def test_slow_lidar_neither_delays_camera_and_imu_nor_queues_scans(
             await wait_until(lambda: node.counters["lidar"].processed == 2, "newest scan")
             assert node.counters["lidar"].skipped == 2
             # the pipeline's step timings, returned from the worker, reach the trace
-            stages = {s["stage"] for s in tracer.batch_msg()["spans"]
-                      if s["topic"] == "/lidar/points"}
+            stages = {
+                s["stage"] for s in tracer.batch_msg()["spans"] if s["topic"] == "/lidar/points"
+            }
             assert {"process", "process.filter", "process.dbscan", "process.boxes"} <= stages
         finally:
             gate.touch()
@@ -262,7 +266,13 @@ async def test_python_m_navigation_leaves_no_worker_process_behind(
     LIDAR worker process ends too."""
     diagnostics = await peer.subscribe("/nav/diagnostics", "diagnostic_msgs/msg/DiagnosticArray")
     process = await asyncio.create_subprocess_exec(
-        sys.executable, "-m", "navigation", "--bridge", bridge_url, "--log-level", "WARNING",
+        sys.executable,
+        "-m",
+        "navigation",
+        "--bridge",
+        bridge_url,
+        "--log-level",
+        "WARNING",
         start_new_session=True,
     )
     workers: set[int] = set()

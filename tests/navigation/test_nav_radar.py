@@ -44,8 +44,10 @@ def test_targets_come_out_at_their_cartesian_position(check_canonical):
     assert np.shares_memory(image, msg["reflectance"])
     detector = CfarDetector.from_config(CfarConfig(false_alarm_rate=1e-4))
     found, targets = detect(image, PolarGeometry.of(msg), detector)
-    for xy in (np.column_stack([found.x_m, found.y_m]),
-               np.column_stack([targets.x_m, targets.y_m])):
+    for xy in (
+        np.column_stack([found.x_m, found.y_m]),
+        np.column_stack([targets.x_m, targets.y_m]),
+    ):
         for expected in ([0.0, 100.125], [-20.125, 0.0]):
             assert np.min(np.linalg.norm(xy - expected, axis=1)) < 1e-3
     assert np.all(found.power > found.threshold)

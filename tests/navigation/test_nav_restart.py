@@ -49,8 +49,12 @@ class NavigationProcess:
         with log_path.open("w") as log:
             self.process = subprocess.Popen(
                 [sys.executable, "-m", "navigation", "--bridge", url, "--log-level", "INFO"],
-                cwd=REPO_ROOT, env=env, stdin=subprocess.DEVNULL, stdout=log,
-                stderr=subprocess.STDOUT)
+                cwd=REPO_ROOT,
+                env=env,
+                stdin=subprocess.DEVNULL,
+                stdout=log,
+                stderr=subprocess.STDOUT,
+            )
 
     def log(self) -> str:
         return self.log_path.read_text(errors="replace")
@@ -60,8 +64,7 @@ class NavigationProcess:
         deadline = time.monotonic() + STARTUP_TIMEOUT_S
         while len(re.findall(pattern, self.log())) < count:
             if self.process.poll() is not None or time.monotonic() > deadline:
-                raise AssertionError(f"navigation never logged {pattern!r} x{count}:\n"
-                                     f"{self.log()}")
+                raise AssertionError(f"navigation never logged {pattern!r} x{count}:\n{self.log()}")
             await asyncio.sleep(0.1)
 
     def stop(self) -> int:
@@ -88,26 +91,40 @@ def sensor_messages(stamp_ns: int, scan_points: np.ndarray) -> dict[str, dict[st
     """One message per navigation input, all stamped `stamp_ns`."""
     power = radar_noise_image(72, 200, 1.0, seed=1)
     power[18, 100] = 500.0
-    radar = {"header": header_msg(stamp_ns, "radar"), "azimuth_min_rad": 0.0,
-             "azimuth_step_rad": float(np.float32(np.deg2rad(5.0))),
-             "beam_width_azimuth_rad": float(np.float32(np.deg2rad(5.0))),
-             "beam_width_elevation_rad": float(np.float32(np.deg2rad(15.0))),
-             "range_min_m": 0.0, "range_step_m": 0.5, "num_beams": 72, "num_cells": 200,
-             "reflectance": power.reshape(-1)}
+    radar = {
+        "header": header_msg(stamp_ns, "radar"),
+        "azimuth_min_rad": 0.0,
+        "azimuth_step_rad": float(np.float32(np.deg2rad(5.0))),
+        "beam_width_azimuth_rad": float(np.float32(np.deg2rad(5.0))),
+        "beam_width_elevation_rad": float(np.float32(np.deg2rad(15.0))),
+        "range_min_m": 0.0,
+        "range_step_m": 0.5,
+        "num_beams": 72,
+        "num_cells": 200,
+        "reflectance": power.reshape(-1),
+    }
     image = np.full((240, 320, 3), 30, np.uint8)
     cv2.line(image, (0, 150), (319, 150), (255, 255, 255), 3)
-    camera = {"header": header_msg(stamp_ns, "camera"), "format": "jpeg",
-              "data": cv2.imencode(".jpg", image)[1].tobytes()}
-    imu = {"header": header_msg(stamp_ns, "imu"),
-           "orientation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0},
-           "orientation_covariance": [0.0] * 9,
-           "angular_velocity": {"x": 0.0, "y": 0.0, "z": 0.01},
-           "angular_velocity_covariance": [0.0] * 9,
-           "linear_acceleration": {"x": 0.0, "y": 0.0, "z": 9.81},
-           "linear_acceleration_covariance": [0.0] * 9}
-    return {SENSOR_INPUTS["lidar"][0]: pack_points(scan_points, stamp_ns, "lidar"),
-            SENSOR_INPUTS["radar"][0]: radar, SENSOR_INPUTS["camera"][0]: camera,
-            IMU_INPUT[0]: imu}
+    camera = {
+        "header": header_msg(stamp_ns, "camera"),
+        "format": "jpeg",
+        "data": cv2.imencode(".jpg", image)[1].tobytes(),
+    }
+    imu = {
+        "header": header_msg(stamp_ns, "imu"),
+        "orientation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0},
+        "orientation_covariance": [0.0] * 9,
+        "angular_velocity": {"x": 0.0, "y": 0.0, "z": 0.01},
+        "angular_velocity_covariance": [0.0] * 9,
+        "linear_acceleration": {"x": 0.0, "y": 0.0, "z": 9.81},
+        "linear_acceleration_covariance": [0.0] * 9,
+    }
+    return {
+        SENSOR_INPUTS["lidar"][0]: pack_points(scan_points, stamp_ns, "lidar"),
+        SENSOR_INPUTS["radar"][0]: radar,
+        SENSOR_INPUTS["camera"][0]: camera,
+        IMU_INPUT[0]: imu,
+    }
 
 
 async def feed(peer: RosbridgeClient, epoch_sec: int, scan_points: np.ndarray) -> None:
@@ -119,17 +136,19 @@ async def feed(peer: RosbridgeClient, epoch_sec: int, scan_points: np.ndarray) -
         await asyncio.sleep(FEED_PERIOD_S)
 
 
-async def outputs_from_epoch(peer: RosbridgeClient, epoch_sec: int,
-                             scan_points: np.ndarray) -> dict[str, dict]:
+async def outputs_from_epoch(
+    peer: RosbridgeClient, epoch_sec: int, scan_points: np.ndarray
+) -> dict[str, dict]:
     """Feed data of `epoch_sec` until every /nav/* output has answered; the first message
     of each output (stamped outputs: the first stamped in that epoch)."""
-    subs = {topic: await peer.subscribe(topic, type_name, maxsize=10)
-            for topic, type_name in OUTPUT_TYPES.items()}
+    subs = {
+        topic: await peer.subscribe(topic, type_name, maxsize=10)
+        for topic, type_name in OUTPUT_TYPES.items()
+    }
 
     async def first(topic: str) -> tuple[str, dict]:
         async for received in subs[topic]:
-            if topic not in STAMPED or (
-                    stamp_ns_of(received.msg["header"]) >= epoch_sec * 10**9):
+            if topic not in STAMPED or (stamp_ns_of(received.msg["header"]) >= epoch_sec * 10**9):
                 return topic, received.msg
         raise AssertionError(f"{topic}: subscription ended")
 
@@ -151,8 +170,9 @@ async def test_navigation_resumes_its_outputs_after_the_bridge_restarts(tmp_path
     async with contextlib.AsyncExitStack() as stack:
         async with run_bridge(BridgeConfig(host="127.0.0.1", port=0)) as first_bridge:
             url, port = first_bridge.url, first_bridge.port
-            peer = await stack.enter_async_context(RosbridgeClient(
-                url, connect_timeout=WAIT_S, backoff_max=0.5, name="peer"))
+            peer = await stack.enter_async_context(
+                RosbridgeClient(url, connect_timeout=WAIT_S, backoff_max=0.5, name="peer")
+            )
             for topic, type_name in [*SENSOR_INPUTS.values(), IMU_INPUT]:
                 await peer.advertise(topic, type_name)
             nav = stack.enter_context(running_navigation(url, tmp_path / "navigation.log"))

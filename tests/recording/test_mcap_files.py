@@ -29,23 +29,33 @@ def canonical(registry: TypeRegistry, type_name: str, msg: dict) -> dict:
     return normalize(registry.message(type_name), msg, now_ns=0)
 
 
-def write_ours(path: Path, registry: TypeRegistry, imu_count: int = 30,
-               clouds: int = 3, **options: object) -> McapRecording:
+def write_ours(
+    path: Path, registry: TypeRegistry, imu_count: int = 30, clouds: int = 3, **options: object
+) -> McapRecording:
     recording = McapRecording(path, **options)  # type: ignore[arg-type]
     for topic, type_name in (IMU, CLOUD):
         recording.add_topic(topic, type_name, registry.full_text(type_name))
     for k in range(imu_count):
         stamp_ns = START_NS + k * 10_000_000
-        recording.add_message(IMU[0], to_cdr(registry, IMU[1], canonical(
-            registry, IMU[1], imu(stamp_ns, k))), stamp_ns + 1000, stamp_ns + 500)
+        recording.add_message(
+            IMU[0],
+            to_cdr(registry, IMU[1], canonical(registry, IMU[1], imu(stamp_ns, k))),
+            stamp_ns + 1000,
+            stamp_ns + 500,
+        )
         if k % 10 == 0 and k // 10 < clouds:
-            recording.add_message(CLOUD[0], to_cdr(registry, CLOUD[1], cloud(
-                stamp_ns, 20_000, k)), stamp_ns + 2000, stamp_ns + 1500)
+            recording.add_message(
+                CLOUD[0],
+                to_cdr(registry, CLOUD[1], cloud(stamp_ns, 20_000, k)),
+                stamp_ns + 2000,
+                stamp_ns + 1500,
+            )
     return recording
 
 
 def test_a_recording_has_ros2_schemas_cdr_channels_and_decodes_independently(
-        tmp_path: Path, registry: TypeRegistry) -> None:
+    tmp_path: Path, registry: TypeRegistry
+) -> None:
     path = tmp_path / "run.mcap"
     write_ours(path, registry).close()
     with open(path, "rb") as stream:
@@ -61,8 +71,10 @@ def test_a_recording_has_ros2_schemas_cdr_channels_and_decodes_independently(
         for channel in summary.channels.values():
             assert channel.message_encoding == "cdr"
             assert channel.metadata == {"offered_qos_profiles": ""}
-        decoded = [(channel.topic, message, ros_msg) for _, channel, message, ros_msg
-                   in reader.iter_decoded_messages()]
+        decoded = [
+            (channel.topic, message, ros_msg)
+            for _, channel, message, ros_msg in reader.iter_decoded_messages()
+        ]
     clouds = [(message, msg) for topic, message, msg in decoded if topic == CLOUD[0]]
     assert len(clouds) == 3
     message, first = clouds[0]
@@ -77,14 +89,15 @@ def test_a_recording_has_ros2_schemas_cdr_channels_and_decodes_independently(
     assert yaw_rates == [float(k) for k in range(30)]
 
 
-def test_rosbags_rosbag2_reader_reads_a_recording(tmp_path: Path,
-                                                  registry: TypeRegistry) -> None:
+def test_rosbags_rosbag2_reader_reads_a_recording(tmp_path: Path, registry: TypeRegistry) -> None:
     """rosbags implements rosbag2's MCAP storage: topics, types, counts and messages."""
     path = tmp_path / "run.mcap"
     write_ours(path, registry).close()
     with Rosbag2Reader(path) as bag:
         assert {t: (i.msgtype, i.msgcount) for t, i in bag.topics.items()} == {
-            IMU[0]: (IMU[1], 30), CLOUD[0]: (CLOUD[1], 3)}
+            IMU[0]: (IMU[1], 30),
+            CLOUD[0]: (CLOUD[1], 3),
+        }
         connection = next(c for c in bag.connections if c.topic == CLOUD[0])
         raw = next(data for _, _, data in bag.messages(connections=[connection]))
     assert from_cdr(registry, CLOUD[1], raw)["width"] == 20_000
@@ -106,7 +119,8 @@ def complete_chunks(path: Path) -> int:
 
 
 def test_a_cut_off_recording_reads_up_to_its_last_complete_chunk(
-        tmp_path: Path, registry: TypeRegistry) -> None:
+    tmp_path: Path, registry: TypeRegistry
+) -> None:
     """What a killed recorder leaves: the file without its summary, ending mid-chunk."""
     whole = tmp_path / "whole.mcap"
     write_ours(whole, registry, imu_count=30, clouds=3, chunk_bytes=64 * 1024).close()
@@ -119,16 +133,20 @@ def test_a_cut_off_recording_reads_up_to_its_last_complete_chunk(
     clouds = [m for m in messages if m.topic == CLOUD[0]]
     assert 1 <= len(clouds) <= 2 and len(messages) >= 11
     assert from_cdr(registry, CLOUD[1], clouds[0].cdr)["width"] == 20_000
-    assert [from_cdr(registry, IMU[1], m.cdr)["angular_velocity"]["z"]
-            for m in messages if m.topic == IMU[0]] == [float(k) for k in range(
-                sum(m.topic == IMU[0] for m in messages))]
+    assert [
+        from_cdr(registry, IMU[1], m.cdr)["angular_velocity"]["z"]
+        for m in messages
+        if m.topic == IMU[0]
+    ] == [float(k) for k in range(sum(m.topic == IMU[0] for m in messages))]
 
 
-def test_reading_takes_the_wanted_topics_in_time_order(tmp_path: Path,
-                                                       registry: TypeRegistry) -> None:
+def test_reading_takes_the_wanted_topics_in_time_order(
+    tmp_path: Path, registry: TypeRegistry
+) -> None:
     path = tmp_path / "reference.mcap"
-    events = write_reference_recording(path, registry, start_ns=START_NS, imu_hz=50,
-                                       cloud_hz=2, seconds=1.0)
+    events = write_reference_recording(
+        path, registry, start_ns=START_NS, imu_hz=50, cloud_hz=2, seconds=1.0
+    )
     messages = list(read_recording(path, TopicFilter(("/imu/*",))))
     assert [m.log_time_ns for m in messages] == [t for topic, t, _ in events if topic == IMU[0]]
     assert {m.type_name for m in messages} == {IMU[1]}
@@ -145,11 +163,17 @@ def test_topic_filters() -> None:
 
 
 def test_restamp_moves_every_nested_header() -> None:
-    tf = {"transforms": [{"header": {"stamp": {"sec": 1, "nanosec": 5}, "frame_id": "a"}},
-                         {"header": {"stamp": {"sec": 2, "nanosec": 999_999_999}}}]}
+    tf = {
+        "transforms": [
+            {"header": {"stamp": {"sec": 1, "nanosec": 5}, "frame_id": "a"}},
+            {"header": {"stamp": {"sec": 2, "nanosec": 999_999_999}}},
+        ]
+    }
     restamp(tf, lambda ns: ns + 1)
     assert [t["header"]["stamp"] for t in tf["transforms"]] == [
-        {"sec": 1, "nanosec": 6}, {"sec": 3, "nanosec": 0}]
+        {"sec": 1, "nanosec": 6},
+        {"sec": 3, "nanosec": 0},
+    ]
     sample = imu(5_000_000_000, 1)
     restamp(sample, lambda ns: ns * 2)
     assert sample["header"]["stamp"] == {"sec": 10, "nanosec": 0}
@@ -157,11 +181,18 @@ def test_restamp_moves_every_nested_header() -> None:
 
 def test_a_type_unknown_here_is_registered_from_the_recording() -> None:
     registry = TypeRegistry.with_defaults()
-    definition = ("geometry_msgs/Point where\nint32 count\n" + "=" * 80
-                  + "\nMSG: geometry_msgs/Point\nfloat64 x\nfloat64 y\nfloat64 z\n")
+    definition = (
+        "geometry_msgs/Point where\nint32 count\n"
+        + "=" * 80
+        + "\nMSG: geometry_msgs/Point\nfloat64 x\nfloat64 y\nfloat64 z\n"
+    )
     with pytest.raises(Exception, match="elsewhere_msgs"):
         registry.message("elsewhere_msgs/msg/Thing")
     ensure_type(registry, "elsewhere_msgs/msg/Thing", definition)
     msg = {"where": {"x": 1.0, "y": 2.0, "z": 3.0}, "count": 7}
-    assert from_cdr(registry, "elsewhere_msgs/msg/Thing",
-                    to_cdr(registry, "elsewhere_msgs/msg/Thing", msg)) == msg
+    assert (
+        from_cdr(
+            registry, "elsewhere_msgs/msg/Thing", to_cdr(registry, "elsewhere_msgs/msg/Thing", msg)
+        )
+        == msg
+    )

@@ -31,8 +31,9 @@ def start_recorder(url: str, output: Path, *extra: str) -> Running:
     return Running([*RIVERBRIDGE, "record", "--bridge", url, "--output", str(output), *extra])
 
 
-async def publish(client: RosbridgeClient, imu_count: int, imu_hz: float,
-                  cloud_every: int, cloud_points: int) -> int:
+async def publish(
+    client: RosbridgeClient, imu_count: int, imu_hz: float, cloud_every: int, cloud_points: int
+) -> int:
     """IMU samples (yaw rate = index) with a cloud every ``cloud_every`` samples; the number
     of clouds sent."""
     clouds = 0
@@ -54,10 +55,13 @@ def decoded(path: Path) -> list[tuple[str, object]]:
 
 
 async def test_record_takes_every_message_of_new_topics_and_honours_globs(
-        bridge_url: str, tmp_path: Path) -> None:
+    bridge_url: str, tmp_path: Path
+) -> None:
     everything, imu_only = tmp_path / "all.mcap", tmp_path / "imu.mcap"
-    recorders = [start_recorder(bridge_url, everything),
-                 start_recorder(bridge_url, imu_only, "--topics", "/imu/*")]
+    recorders = [
+        start_recorder(bridge_url, everything),
+        start_recorder(bridge_url, imu_only, "--topics", "/imu/*"),
+    ]
     try:
         recorders[0].wait_for_line(r"recording /rosout")  # its first discovery is done
         recorders[1].wait_for_line(r"recorder connected")
@@ -67,8 +71,9 @@ async def test_record_takes_every_message_of_new_topics_and_honours_globs(
             for recorder in recorders:
                 recorder.wait_for_line(r"recording /imu/data", timeout_s=20)
             recorders[0].wait_for_line(r"recording /lidar/points", timeout_s=20)
-            clouds = await publish(client, imu_count=100, imu_hz=100, cloud_every=25,
-                                   cloud_points=THESIS_SCAN_POINTS)
+            clouds = await publish(
+                client, imu_count=100, imu_hz=100, cloud_every=25, cloud_points=THESIS_SCAN_POINTS
+            )
             await asyncio.sleep(1.0)
     finally:
         codes = [recorder.stop() for recorder in recorders]
@@ -91,8 +96,7 @@ def read_until_cut(path: Path) -> tuple[list[float], bool]:
     cut = False
     with open(path, "rb") as stream:
         try:
-            for _, channel, message in NonSeekingReader(stream).iter_messages(
-                    log_time_order=False):
+            for _, channel, message in NonSeekingReader(stream).iter_messages(log_time_order=False):
                 if channel.topic == IMU[0]:
                     msg = from_cdr(registry, IMU[1], message.data)
                     yaw_rates.append(msg["angular_velocity"]["z"])
@@ -102,7 +106,8 @@ def read_until_cut(path: Path) -> tuple[list[float], bool]:
 
 
 async def test_a_killed_recorder_leaves_a_file_readable_to_its_last_chunk(
-        bridge_url: str, tmp_path: Path) -> None:
+    bridge_url: str, tmp_path: Path
+) -> None:
     path = tmp_path / "killed.mcap"
     recorder = start_recorder(bridge_url, path)
     try:
@@ -110,8 +115,7 @@ async def test_a_killed_recorder_leaves_a_file_readable_to_its_last_chunk(
             for topic in (IMU, CLOUD):
                 await client.advertise(*topic)
             recorder.wait_for_line(r"recording /lidar/points", timeout_s=20)
-            await publish(client, imu_count=250, imu_hz=100, cloud_every=50,
-                          cloud_points=50_000)
+            await publish(client, imu_count=250, imu_hz=100, cloud_every=50, cloud_points=50_000)
             recorder.process.send_signal(signal.SIGKILL)  # while messages are in flight
             recorder.process.wait(timeout=10)
             sent_before_kill = 250

@@ -25,16 +25,21 @@ def topic_counts(path: Path) -> tuple[dict[str, int], object]:
         reader = make_reader(stream, decoder_factories=[DecoderFactory()])
         summary = reader.get_summary()
         assert summary is not None and summary.statistics is not None, f"{path} unfinished"
-        counts = {channel.topic: summary.statistics.channel_message_counts.get(channel_id, 0)
-                  for channel_id, channel in summary.channels.items()}
-        scan = next(msg for _, _, _, msg in reader.iter_decoded_messages(
-            topics=["/lidar/points"]))
+        counts = {
+            channel.topic: summary.statistics.channel_message_counts.get(channel_id, 0)
+            for channel_id, channel in summary.channels.items()
+        }
+        scan = next(msg for _, _, _, msg in reader.iter_decoded_messages(topics=["/lidar/points"]))
     return counts, scan
 
 
 def report(*args: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([*RIVERBRIDGE, "report", "--warmup", "2", *args],
-                          capture_output=True, text=True, timeout=400)
+    return subprocess.run(
+        [*RIVERBRIDGE, "report", "--warmup", "2", *args],
+        capture_output=True,
+        text=True,
+        timeout=400,
+    )
 
 
 def test_record_the_stack_then_measure_navigation_on_the_replay(tmp_path: Path) -> None:
@@ -55,8 +60,7 @@ def test_record_the_stack_then_measure_navigation_on_the_replay(tmp_path: Path) 
         assert scan.width * scan.height > 10_000 and scan.point_step == 16
 
     replay_json = tmp_path / "replay.json"
-    replayed = report("--replay", str(stack_file), "--duration", "4", "--json",
-                      str(replay_json))
+    replayed = report("--replay", str(stack_file), "--duration", "4", "--json", str(replay_json))
     assert replayed.returncode == 0, replayed.stdout + replayed.stderr
     assert replayed.stdout.startswith(f"REPLAY of {stack_file}")
     run = json.loads(replay_json.read_text())["runs"][0]

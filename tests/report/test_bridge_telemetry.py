@@ -51,12 +51,16 @@ async def collect_spans(sub, until, timeout_s: float = 8.0) -> list:
 
 async def test_every_stage_of_a_message_reaches_a_trace_reader(bridge):
     pub_tracer, sub_tracer = Tracer("pub"), Tracer("sub")
-    async with RosbridgeClient(bridge.url, name="reader") as reader, \
-            RosbridgeClient(bridge.url, name="pub", tracer=pub_tracer) as pub, \
-            RosbridgeClient(bridge.url, name="sub", tracer=sub_tracer) as sub:
+    async with (
+        RosbridgeClient(bridge.url, name="reader") as reader,
+        RosbridgeClient(bridge.url, name="pub", tracer=pub_tracer) as pub,
+        RosbridgeClient(bridge.url, name="sub", tracer=sub_tracer) as sub,
+    ):
         trace = await reader.subscribe(TRACE_TOPIC, TRACE_TYPE, maxsize=1000)
-        async with telemetry(pub, pub_tracer, period_s=0.2), \
-                telemetry(sub, sub_tracer, period_s=0.2):
+        async with (
+            telemetry(pub, pub_tracer, period_s=0.2),
+            telemetry(sub, sub_tracer, period_s=0.2),
+        ):
             received = await sub.subscribe(*IMU)
             await pub.advertise(*IMU)
             await asyncio.sleep(1.5)  # the bridge learns the subscriber's process name
@@ -66,7 +70,12 @@ async def test_every_stage_of_a_message_reaches_a_trace_reader(bridge):
 
             def complete(spans):
                 return {s.stage for s in spans if s.stamp_ns == stamp_ns} >= {
-                    "encode", "send", "bridge_in", "fanout", "decode"}
+                    "encode",
+                    "send",
+                    "bridge_in",
+                    "fanout",
+                    "decode",
+                }
 
             spans = await collect_spans(trace, complete)
     mine = {s.stage: s for s in spans if s.stamp_ns == stamp_ns}
@@ -80,9 +89,11 @@ async def test_every_stage_of_a_message_reaches_a_trace_reader(bridge):
 
 async def test_both_connections_of_a_node_are_named_after_its_process(bridge):
     fix = ("/gnss/fix", "sensor_msgs/msg/NavSatFix")
-    async with RosbridgeClient(bridge.url, name="reader") as reader, \
-            RosbridgeClient(bridge.url, name="pub") as pub, \
-            node_links(bridge.url, "watcher") as links:
+    async with (
+        RosbridgeClient(bridge.url, name="reader") as reader,
+        RosbridgeClient(bridge.url, name="pub") as pub,
+        node_links(bridge.url, "watcher") as links,
+    ):
         assert links.bulk is not links.realtime
         trace = await reader.subscribe(TRACE_TOPIC, TRACE_TYPE, maxsize=1000)
         stats = await reader.subscribe(STATS_TOPIC, STATS_TYPE, maxsize=100)
@@ -112,8 +123,10 @@ async def test_both_connections_of_a_node_are_named_after_its_process(bridge):
 
 async def test_span_batches_go_out_more_often_than_stats(bridge):
     tracer = Tracer("often")
-    async with RosbridgeClient(bridge.url, name="reader") as reader, \
-            RosbridgeClient(bridge.url, name="often") as pub:
+    async with (
+        RosbridgeClient(bridge.url, name="reader") as reader,
+        RosbridgeClient(bridge.url, name="often") as pub,
+    ):
         trace = await reader.subscribe(TRACE_TOPIC, TRACE_TYPE, maxsize=1000)
         stats = await reader.subscribe(STATS_TOPIC, STATS_TYPE, maxsize=1000)
         async with telemetry(pub, tracer, period_s=1.0, trace_period_s=0.1):
@@ -121,8 +134,11 @@ async def test_span_batches_go_out_more_often_than_stats(bridge):
                 tracer.record(IMU[0], k, "generate", k, k + 1)
                 await asyncio.sleep(0.1)
         await asyncio.sleep(0.5)
-        batches = [b for b in (m.msg for m in _all(trace)) if b["spans"]
-                   and b["spans"][0]["process"] == "often"]
+        batches = [
+            b
+            for b in (m.msg for m in _all(trace))
+            if b["spans"] and b["spans"][0]["process"] == "often"
+        ]
         announced = [m for m in (m.msg for m in _all(stats)) if m["process"] == "often"]
     assert len(batches) >= 6, len(batches)
     assert 1 <= len(announced) <= 3, len(announced)  # each second, and once more at the end
@@ -158,8 +174,10 @@ async def test_stats_service_metrics_and_client_count(bridge):
     assert answer["clients"] == 2 and len(answer["client_nodes"]) == 2
     assert own["process"] == "bridge" and own["rss_bytes"] > 0
     families = {f.name: f for f in text_string_to_metric_families(metrics)}
-    assert {(s.labels["topic"], s.labels["direction"]): s.value
-            for s in families["riverbridge_messages"].samples}[(IMU[0], "in")] == 3
+    assert {
+        (s.labels["topic"], s.labels["direction"]): s.value
+        for s in families["riverbridge_messages"].samples
+    }[(IMU[0], "in")] == 3
     assert families["riverbridge_clients"].type == "gauge"
     assert families["riverbridge_process_resident_memory_bytes"].samples[0].value > 0
     assert families["process_cpu_seconds"].samples[0].value > 0

@@ -14,16 +14,19 @@ def parse(text: str) -> dict[str, dict[tuple[tuple[str, str], ...], float]]:
     for family in text_string_to_metric_families(text):
         samples.setdefault("#type", {})[(("name", family.name),)] = family.type
         for sample in family.samples:
-            samples.setdefault(sample.name, {})[tuple(sorted(sample.labels.items()))] = (
-                sample.value)
+            samples.setdefault(sample.name, {})[tuple(sorted(sample.labels.items()))] = sample.value
     return samples
 
 
 def test_counters_per_topic_and_direction_with_help_and_type() -> None:
     snapshot = MetricsSnapshot(
         topics={"/b": TopicTraffic(1, 2, 30, 40, 50), "/a": TopicTraffic(messages_in=7)},
-        drops={("/b", "navigation"): 3}, clients=2, cpu_percent=12.5, rss_bytes=1000,
-        spans_discarded=4)
+        drops={("/b", "navigation"): 3},
+        clients=2,
+        cpu_percent=12.5,
+        rss_bytes=1000,
+        spans_discarded=4,
+    )
     text = render_metrics(snapshot)
     metrics = parse(text)
     messages = metrics["riverbridge_messages_total"]
@@ -31,8 +34,9 @@ def test_counters_per_topic_and_direction_with_help_and_type() -> None:
     assert messages[(("direction", "out"), ("topic", "/b"))] == 2
     assert metrics["riverbridge_wire_bytes_total"][(("direction", "out"), ("topic", "/b"))] == 50
     assert metrics["riverbridge_payload_bytes_total"][(("topic", "/b"),)] == 30
-    assert metrics["riverbridge_dropped_total"][(("subscriber", "navigation"),
-                                                 ("topic", "/b"))] == 3
+    assert (
+        metrics["riverbridge_dropped_total"][(("subscriber", "navigation"), ("topic", "/b"))] == 3
+    )
     assert metrics["riverbridge_clients"][()] == 2
     assert metrics["riverbridge_process_cpu_percent"][()] == 12.5
     assert metrics["riverbridge_process_resident_memory_bytes"][()] == 1000
@@ -43,7 +47,8 @@ def test_counters_per_topic_and_direction_with_help_and_type() -> None:
     lines = text.splitlines()
     assert "# TYPE riverbridge_messages_total counter" in lines
     assert lines.index('riverbridge_messages_total{direction="in",topic="/a"} 7.0') < lines.index(
-        'riverbridge_messages_total{direction="in",topic="/b"} 1.0')
+        'riverbridge_messages_total{direction="in",topic="/b"} 1.0'
+    )
     assert text.endswith("\n")
 
 

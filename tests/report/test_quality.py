@@ -28,41 +28,64 @@ def header(sec: int, frame: str = "lidar") -> dict:
 
 def obj(id_: int, center, size, yaw=0.0, returns=50, range_m=None, dominant=0) -> dict:
     x, y, z = center
-    return {"id": id_, "kind": "tree", "center": {"x": x, "y": y, "z": z}, "yaw_rad": yaw,
-            "size": dict(zip("xyz", size, strict=True)), "returns": returns,
-            "range_m": math.hypot(x, y) if range_m is None else range_m,
-            "dominant_cells": dominant}
+    return {
+        "id": id_,
+        "kind": "tree",
+        "center": {"x": x, "y": y, "z": z},
+        "yaw_rad": yaw,
+        "size": dict(zip("xyz", size, strict=True)),
+        "returns": returns,
+        "range_m": math.hypot(x, y) if range_m is None else range_m,
+        "dominant_cells": dominant,
+    }
 
 
 def box(lo, hi) -> dict:
-    return {"cluster_id": 0, "num_points": 10, "min": dict(zip("xyz", lo, strict=True)),
-            "max": dict(zip("xyz", hi, strict=True))}
+    return {
+        "cluster_id": 0,
+        "num_points": 10,
+        "min": dict(zip("xyz", lo, strict=True)),
+        "max": dict(zip("xyz", hi, strict=True)),
+    }
 
 
 def test_a_box_centre_inside_a_turned_object_grown_by_the_margin():
     turned = obj(0, (10.0, 0.0, 0.0), (8.0, 2.0, 2.0), yaw=np.pi / 2)  # long side along y
-    centres = np.array([[10.0, 3.9, 0.0],  # inside along the object's length
-                        [13.9, 0.0, 0.0],  # 3.9 m across: beyond 1 m + 1 m margin
-                        [11.9, 0.0, 0.0],  # 1.9 m across: inside the margin
-                        [10.0, 0.0, 2.5]])  # above the top, beyond the margin
-    np.testing.assert_array_equal(inside_objects(centres, [turned], 1.0)[:, 0],
-                                  [True, False, True, False])
+    centres = np.array(
+        [
+            [10.0, 3.9, 0.0],  # inside along the object's length
+            [13.9, 0.0, 0.0],  # 3.9 m across: beyond 1 m + 1 m margin
+            [11.9, 0.0, 0.0],  # 1.9 m across: inside the margin
+            [10.0, 0.0, 2.5],
+        ]
+    )  # above the top, beyond the margin
+    np.testing.assert_array_equal(
+        inside_objects(centres, [turned], 1.0)[:, 0], [True, False, True, False]
+    )
 
 
 def test_lidar_counts_true_boxes_and_visible_detected_objects():
-    truth = {"header": header(1), "objects": [
-        obj(0, (20.0, 0.0, 0.0), (4.0, 4.0, 6.0)),  # found by a box
-        obj(1, (0.0, 30.0, 0.0), (4.0, 4.0, 6.0)),  # visible, missed
-        obj(2, (0.0, -30.0, 0.0), (4.0, 4.0, 6.0), returns=9),  # too few returns to count
-        obj(3, (150.0, 0.0, 0.0), (4.0, 4.0, 6.0)),  # beyond the evaluation range
-    ]}
-    boxes = {"header": header(1), "boxes": [
-        box((19.0, -1.0, 0.0), (21.0, 1.0, 2.0)), box((20.0, 1.0, 0.0), (22.0, 3.0, 2.0)),
-        box((50.0, 50.0, 0.0), (51.0, 51.0, 1.0)),  # nothing there: a false box
-        box((-1.0, -31.0, 0.0), (1.0, -29.0, 1.0)),  # on object 2: true, though not visible
-    ]}
+    truth = {
+        "header": header(1),
+        "objects": [
+            obj(0, (20.0, 0.0, 0.0), (4.0, 4.0, 6.0)),  # found by a box
+            obj(1, (0.0, 30.0, 0.0), (4.0, 4.0, 6.0)),  # visible, missed
+            obj(2, (0.0, -30.0, 0.0), (4.0, 4.0, 6.0), returns=9),  # too few returns to count
+            obj(3, (150.0, 0.0, 0.0), (4.0, 4.0, 6.0)),  # beyond the evaluation range
+        ],
+    }
+    boxes = {
+        "header": header(1),
+        "boxes": [
+            box((19.0, -1.0, 0.0), (21.0, 1.0, 2.0)),
+            box((20.0, 1.0, 0.0), (22.0, 3.0, 2.0)),
+            box((50.0, 50.0, 0.0), (51.0, 51.0, 1.0)),  # nothing there: a false box
+            box((-1.0, -31.0, 0.0), (1.0, -29.0, 1.0)),  # on object 2: true, though not visible
+        ],
+    }
     assert lidar_scan_counts(truth, boxes) == LidarCounts(
-        boxes=4, true_boxes=3, visible_objects=2, detected_objects=1)
+        boxes=4, true_boxes=3, visible_objects=2, detected_objects=1
+    )
     quality = lidar_quality([(truth, boxes), (truth, boxes)])
     assert quality.scans == 2 and quality.counts.boxes == 8
     assert quality.precision == pytest.approx(0.75) and quality.recall == pytest.approx(0.5)
@@ -73,23 +96,41 @@ def test_radar_targets_are_judged_by_their_strongest_cell():
     source[:, 0] = NO_RETURN
     source[1, 3] = 7  # object 7 dominates one cell
     source[2, 2:4] = LAND
-    truth = {"header": header(2, "radar"), "num_beams": 4, "num_cells": 5,
-             "cell_source": source.reshape(-1),
-             "objects": [obj(7, (12.0, 0.0, 0.0), (2.0, 2.0, 2.0), dominant=1),
-                         obj(8, (30.0, 0.0, 0.0), (2.0, 2.0, 2.0), dominant=0)]}
+    truth = {
+        "header": header(2, "radar"),
+        "num_beams": 4,
+        "num_cells": 5,
+        "cell_source": source.reshape(-1),
+        "objects": [
+            obj(7, (12.0, 0.0, 0.0), (2.0, 2.0, 2.0), dominant=1),
+            obj(8, (30.0, 0.0, 0.0), (2.0, 2.0, 2.0), dominant=0),
+        ],
+    }
 
     def det(beam, cell, target):
         return {"beam": beam, "cell": cell, "target": target}
 
-    detections = {"header": header(2, "radar"), "false_alarm_rate": 0.1,
-                  "detections": [det(1, 3, 0), det(1, 4, 0), det(2, 2, 1), det(3, 1, 2)],
-                  "targets": [{"peak_beam": 1, "peak_cell": 3},  # on object 7
-                              {"peak_beam": 2, "peak_cell": 2},  # on land
-                              {"peak_beam": 3, "peak_cell": 1}]}  # on open water: false
+    detections = {
+        "header": header(2, "radar"),
+        "false_alarm_rate": 0.1,
+        "detections": [det(1, 3, 0), det(1, 4, 0), det(2, 2, 1), det(3, 1, 2)],
+        "targets": [
+            {"peak_beam": 1, "peak_cell": 3},  # on object 7
+            {"peak_beam": 2, "peak_cell": 2},  # on land
+            {"peak_beam": 3, "peak_cell": 1},
+        ],
+    }  # on open water: false
     counts = radar_sweep_counts(truth, detections)
-    assert counts == RadarCounts(targets=3, on_object=1, on_land=1, on_open_water=1,
-                                 visible_objects=1, detected_objects=1,
-                                 open_water_cells=17, open_water_detections=2)
+    assert counts == RadarCounts(
+        targets=3,
+        on_object=1,
+        on_land=1,
+        on_open_water=1,
+        visible_objects=1,
+        detected_objects=1,
+        open_water_cells=17,
+        open_water_detections=2,
+    )
     quality = radar_quality([(truth, detections)])
     assert quality.precision == pytest.approx(2 / 3) and quality.recall == 1.0
     assert quality.open_water_false_alarm_rate == pytest.approx(2 / 17)

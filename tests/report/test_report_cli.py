@@ -11,20 +11,40 @@ import pytest
 
 from clients.report.cli import main, profile_sim_config
 
-SENSORS = {"/lidar/points": 2.0, "/radar/image": 2.0, "/camera/image/compressed": 2.0,
-           "/imu/data": 50.0}
-STAGES = ("generate", "publish_wait", "encode", "send", "pub_to_bridge", "bridge_in", "fanout",
-          "bridge_to_sub", "decode", "wait", "process", "transport", "result")
+SENSORS = {
+    "/lidar/points": 2.0,
+    "/radar/image": 2.0,
+    "/camera/image/compressed": 2.0,
+    "/imu/data": 50.0,
+}
+STAGES = (
+    "generate",
+    "publish_wait",
+    "encode",
+    "send",
+    "pub_to_bridge",
+    "bridge_in",
+    "fanout",
+    "bridge_to_sub",
+    "decode",
+    "wait",
+    "process",
+    "transport",
+    "result",
+)
 
 
-@pytest.mark.parametrize("argv, option", [
-    (["--duration", "0"], "--duration"),
-    (["--encoding", "xml"], "--encoding"),
-    (["--json", "/no/such/folder/r.json"], "--json"),
-    (["--bridge", "localhost:9090"], "--bridge"),
-    (["--sim-config", "/no/such.toml"], "--sim-config"),
-    (["--profile", "fast"], "--profile"),
-])
+@pytest.mark.parametrize(
+    "argv, option",
+    [
+        (["--duration", "0"], "--duration"),
+        (["--encoding", "xml"], "--encoding"),
+        (["--json", "/no/such/folder/r.json"], "--json"),
+        (["--bridge", "localhost:9090"], "--bridge"),
+        (["--sim-config", "/no/such.toml"], "--sim-config"),
+        (["--profile", "fast"], "--profile"),
+    ],
+)
 def test_bad_options_name_the_option_and_exit_2(argv, option, capsys):
     assert main(argv) == 2
     assert option in capsys.readouterr().err
@@ -39,7 +59,7 @@ def test_a_profile_the_sim_config_sets_itself_is_refused(tmp_path, capsys):
 
 def test_the_thesis_profile_goes_ahead_of_the_users_settings(tmp_path):
     mine = tmp_path / "mine.toml"
-    mine.write_text("seed = 3\n[lidar]\nwater_model = \"mesh\"\n")
+    mine.write_text('seed = 3\n[lidar]\nwater_model = "mesh"\n')
     assert profile_sim_config("default", mine, tmp_path) == mine
     assert profile_sim_config("default", None, tmp_path) is None
     written = profile_sim_config("thesis", mine, tmp_path)
@@ -48,12 +68,26 @@ def test_the_thesis_profile_goes_ahead_of_the_users_settings(tmp_path):
 
     config = load_config(written)
     assert (config.profile, config.seed, config.lidar.point_fields, config.lidar.water_model) == (
-        "thesis", 3, "xyz", "mesh")
+        "thesis",
+        3,
+        "xyz",
+        "mesh",
+    )
 
 
 def test_unreachable_bridge_fails_with_1(capsys, tmp_path):
-    code = main(["--bridge", "ws://127.0.0.1:9", "--duration", "1", "--warmup", "1",
-                 "--log", str(tmp_path / "log")])
+    code = main(
+        [
+            "--bridge",
+            "ws://127.0.0.1:9",
+            "--duration",
+            "1",
+            "--warmup",
+            "1",
+            "--log",
+            str(tmp_path / "log"),
+        ]
+    )
     assert code == 1
     assert "riverbridge report" in capsys.readouterr().err
 
@@ -63,9 +97,26 @@ def test_unreachable_bridge_fails_with_1(capsys, tmp_path):
 def test_a_report_of_both_profiles_is_complete_and_consistent(tmp_path: Path):
     out = tmp_path / "r.json"
     done = subprocess.run(
-        [sys.executable, "-m", "clients.report.cli", "--duration", "8", "--warmup", "3",
-         "--profile", "default,thesis", "--json", str(out), "--log", str(tmp_path / "stack.log")],
-        capture_output=True, text=True, timeout=190, cwd=Path(__file__).resolve().parents[2])
+        [
+            sys.executable,
+            "-m",
+            "clients.report.cli",
+            "--duration",
+            "8",
+            "--warmup",
+            "3",
+            "--profile",
+            "default,thesis",
+            "--json",
+            str(out),
+            "--log",
+            str(tmp_path / "stack.log"),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=190,
+        cwd=Path(__file__).resolve().parents[2],
+    )
     assert done.returncode == 0, done.stderr[-2000:] + (tmp_path / "stack.log").read_text()[-3000:]
     assert "/lidar/points" in done.stdout and "thesis Ø 86 ms (table A.1 5b)" in done.stdout
     document = json.loads(out.read_text())
@@ -80,14 +131,15 @@ def test_a_report_of_both_profiles_is_complete_and_consistent(tmp_path: Path):
     for each in (run, thesis):
         quality = each["detection_quality"]
         assert quality["lidar"] and quality["radar"], (
-            f"{each['profile']}: no output paired with its ground truth in the window", quality)
+            f"{each['profile']}: no output paired with its ground truth in the window",
+            quality,
+        )
         assert quality["lidar"]["precision"] >= 0.9 and quality["lidar"]["recall"] >= 0.8
         assert quality["radar"]["precision"] >= 0.9 and quality["radar"]["recall"] >= 0.8
         radar = quality["radar"]
         assert radar["open_water_false_alarm_rate"] <= radar["configured_false_alarm_rate"]
         network = each["network"]
-        assert set(network["stack_bytes_per_s_by_process"]) == {"bridge", "simulator",
-                                                                "navigation"}
+        assert set(network["stack_bytes_per_s_by_process"]) == {"bridge", "simulator", "navigation"}
         # every hop at least once: the sensor payload reaches the bridge and goes on
         assert network["stack_over_sensor_payload"] > 1.5
     assert run["encoding"] == "cbor" and len(run["hosts"]) == 1

@@ -25,15 +25,29 @@ MS = 1_000_000
 TOPIC = "/lidar/points"
 
 
-def path_spans(stamp_ns: int, topic: str = TOPIC, transport_extra_ms: float = 0.0,
-               subscriber: str = "navigation") -> list[SpanRecord]:
+def path_spans(
+    stamp_ns: int,
+    topic: str = TOPIC,
+    transport_extra_ms: float = 0.0,
+    subscriber: str = "navigation",
+) -> list[SpanRecord]:
     """One message's full path; every stage 1 ms, hops 1 ms (plus extra before decode)."""
     t = stamp_ns
     extra = int(transport_extra_ms * MS)
 
     def span(stage, process, start_ms, end_ms, peer="", payload=0, wire=0):
-        return SpanRecord(topic, stamp_ns, stage, process, peer, t + int(start_ms * MS),
-                          t + int(end_ms * MS), payload, wire, "host")
+        return SpanRecord(
+            topic,
+            stamp_ns,
+            stage,
+            process,
+            peer,
+            t + int(start_ms * MS),
+            t + int(end_ms * MS),
+            payload,
+            wire,
+            "host",
+        )
 
     return [
         span("generate", "simulator", 0, 10),
@@ -41,14 +55,54 @@ def path_spans(stamp_ns: int, topic: str = TOPIC, transport_extra_ms: float = 0.
         span("send", "simulator", 11, 12, wire=1010),
         span("bridge_in", "bridge", 13, 14, payload=1000, wire=1010),
         span("fanout", "bridge", 14, 15, peer=subscriber, wire=1020),
-        SpanRecord(topic, stamp_ns, "decode", subscriber, "", t + 16 * MS + extra,
-                   t + 17 * MS + extra, 0, 1020, "host"),
-        SpanRecord(topic, stamp_ns, "wait", subscriber, "", t + 17 * MS + extra,
-                   t + 18 * MS + extra, 0, 0, "host"),
-        SpanRecord(topic, stamp_ns, "process", subscriber, "", t + 18 * MS + extra,
-                   t + 30 * MS + extra, 0, 0, "host"),
-        SpanRecord(topic, stamp_ns, "process.dbscan", subscriber, "", t + 18 * MS + extra,
-                   t + 25 * MS + extra, 0, 0, "host"),
+        SpanRecord(
+            topic,
+            stamp_ns,
+            "decode",
+            subscriber,
+            "",
+            t + 16 * MS + extra,
+            t + 17 * MS + extra,
+            0,
+            1020,
+            "host",
+        ),
+        SpanRecord(
+            topic,
+            stamp_ns,
+            "wait",
+            subscriber,
+            "",
+            t + 17 * MS + extra,
+            t + 18 * MS + extra,
+            0,
+            0,
+            "host",
+        ),
+        SpanRecord(
+            topic,
+            stamp_ns,
+            "process",
+            subscriber,
+            "",
+            t + 18 * MS + extra,
+            t + 30 * MS + extra,
+            0,
+            0,
+            "host",
+        ),
+        SpanRecord(
+            topic,
+            stamp_ns,
+            "process.dbscan",
+            subscriber,
+            "",
+            t + 18 * MS + extra,
+            t + 25 * MS + extra,
+            0,
+            0,
+            "host",
+        ),
     ]
 
 
@@ -63,13 +117,19 @@ def test_a_journey_has_every_stage_and_both_hops():
     assert d[RESULT] == pytest.approx(20.0)  # generate.end (10) -> process.end (30)
     assert d["process.dbscan"] == pytest.approx(7.0)
     assert (journey.payload_bytes, journey.wire_in_bytes, journey.wire_out_bytes) == (
-        1000, 1010, 1020)
+        1000,
+        1010,
+        1020,
+    )
 
 
 def test_two_subscribers_pair_with_their_own_fanout():
     spans = path_spans(10**18, subscriber="navigation")
-    other = [s for s in path_spans(10**18, subscriber="dashboard", transport_extra_ms=5.0)
-             if s.stage in ("fanout", "decode")]
+    other = [
+        s
+        for s in path_spans(10**18, subscriber="dashboard", transport_extra_ms=5.0)
+        if s.stage in ("fanout", "decode")
+    ]
     by_subscriber = {j.subscriber: j for j in journeys(spans + other)}
     assert set(by_subscriber) == {"navigation", "dashboard"}
     assert by_subscriber["dashboard"].durations_ms["bridge_to_sub"] == pytest.approx(6.0)
@@ -116,9 +176,22 @@ def test_messages_never_processed_count_as_unprocessed_except_the_last_ones():
 
 
 def test_batches_unpack_into_records():
-    batch = {"host": "h", "spans": [
-        {"topic": "/t", "stamp_ns": 5, "stage": "encode", "process": "p", "peer": "",
-         "start_ns": 1, "end_ns": 2, "payload_bytes": 0, "wire_bytes": 9}]}
+    batch = {
+        "host": "h",
+        "spans": [
+            {
+                "topic": "/t",
+                "stamp_ns": 5,
+                "stage": "encode",
+                "process": "p",
+                "peer": "",
+                "start_ns": 1,
+                "end_ns": 2,
+                "payload_bytes": 0,
+                "wire_bytes": 9,
+            }
+        ],
+    }
     assert spans_of_batch(batch) == [SpanRecord("/t", 5, "encode", "p", "", 1, 2, 0, 9, "h")]
 
 
@@ -128,19 +201,33 @@ def test_median_interval_ignores_duplicates():
 
 
 def test_loopback_counters_are_read_from_proc_net_dev_text():
-    text = ("Inter-|   Receive  |  Transmit\n face |bytes packets errs drop fifo frame "
-            "compressed multicast|bytes packets\n"
-            "    lo: 1000 10 0 0 0 0 0 0 2000 20 0 0 0 0 0 0\n"
-            "  eth0: 5 1 0 0 0 0 0 0 6 1 0 0 0 0 0 0\n")
+    text = (
+        "Inter-|   Receive  |  Transmit\n face |bytes packets errs drop fifo frame "
+        "compressed multicast|bytes packets\n"
+        "    lo: 1000 10 0 0 0 0 0 0 2000 20 0 0 0 0 0 0\n"
+        "  eth0: 5 1 0 0 0 0 0 0 6 1 0 0 0 0 0 0\n"
+    )
     assert loopback_tx_bytes(text) == 2000
     assert loopback_tx_bytes(text, "wlan0") is None
 
 
 def test_process_and_network_summaries():
-    stats = [{"header": {"stamp": {"sec": sec, "nanosec": 0}, "frame_id": ""},
-              "process": "bridge", "cpu_percent": c, "rss_bytes": r, "pid": 1, "host": "h",
-              "messages_out": 1, "messages_in": 2, "bytes_out": 3, "bytes_in": 4,
-              "dropped": 0} for sec, c, r in ((1, 10.0, 100), (2, 30.0, 300), (3, 50.0, 200))]
+    stats = [
+        {
+            "header": {"stamp": {"sec": sec, "nanosec": 0}, "frame_id": ""},
+            "process": "bridge",
+            "cpu_percent": c,
+            "rss_bytes": r,
+            "pid": 1,
+            "host": "h",
+            "messages_out": 1,
+            "messages_in": 2,
+            "bytes_out": 3,
+            "bytes_in": 4,
+            "dropped": 0,
+        }
+        for sec, c, r in ((1, 10.0, 100), (2, 30.0, 300), (3, 50.0, 200))
+    ]
     # A process with two connections announces its third sample on both.
     bridge = process_summary([*stats, stats[2]])["bridge"]
     assert bridge.samples == 3
@@ -163,15 +250,20 @@ def a_topic(payload_bytes: int, wire_in_bytes: int, rate_hz: float) -> TopicSumm
     """A topic summary with the bytes and rate the network figures read."""
     spans = path_spans(10**18)
     summary = summarise(spans, 1.0)[TOPIC]
-    return replace(summary, payload_bytes=payload_bytes, wire_in_bytes=wire_in_bytes,
-                   rate_hz=rate_hz)
+    return replace(
+        summary, payload_bytes=payload_bytes, wire_in_bytes=wire_in_bytes, rate_hz=rate_hz
+    )
 
 
 def test_the_network_overhead_the_thesis_way_counts_every_socket_byte_over_sensor_payload():
     """Table 4.10 over 4.9: all the stack sent (every hop) / the four streams' payload."""
     topics = {"/lidar/points": a_topic(10_000, 10_100, 2.0), "/nav/boxes": a_topic(500, 900, 2.0)}
-    sockets = SocketTraffic(stack_bytes=600_000, instrument_bytes=5_000, sockets=6, by_process={
-        "bridge": 250_000, "simulator": 300_000, "navigation": 50_000})
+    sockets = SocketTraffic(
+        stack_bytes=600_000,
+        instrument_bytes=5_000,
+        sockets=6,
+        by_process={"bridge": 250_000, "simulator": 300_000, "navigation": 50_000},
+    )
     network = network_summary(topics, loopback_bytes=1_000_000, duration_s=10.0, sockets=sockets)
     assert network.stack_bytes_per_s == pytest.approx(60_000.0)
     assert network.stack_over_sensor_payload == pytest.approx(3.0)  # 60 kB/s / 20 kB/s
@@ -183,16 +275,29 @@ def test_the_network_overhead_the_thesis_way_counts_every_socket_byte_over_senso
 
 def test_tables_render_every_stage_and_the_comparison():
     spans = [s for k in range(5) for s in path_spans(10**18 + k * 500 * MS)]
-    run = Run("cbor", 2.5, hosts=("host",), topics=summarise(spans, 2.5),
-              samples={TOPIC: "10 points x 16 B"})
+    run = Run(
+        "cbor",
+        2.5,
+        hosts=("host",),
+        topics=summarise(spans, 2.5),
+        samples={TOPIC: "10 points x 16 B"},
+    )
     text = render_run(run)
-    for stage in ("generate", "bridge_to_sub", "process.dbscan", TRANSPORT,
-                  "thesis Ø 86 ms (table A.1 5b)", "mean", "encoding ratio"):
+    for stage in (
+        "generate",
+        "bridge_to_sub",
+        "process.dbscan",
+        TRANSPORT,
+        "thesis Ø 86 ms (table A.1 5b)",
+        "mean",
+        "encoding ratio",
+    ):
         assert stage in text
     assert "thesis Ø 29 ms (table A.1 3f) NOT COMPARABLE" in text
     assert "10 points x 16 B" in text
-    comparison = render_comparison([run, replace(run, encoding="json"),
-                                    replace(run, profile="thesis")])
+    comparison = render_comparison(
+        [run, replace(run, encoding="json"), replace(run, profile="thesis")]
+    )
     header = comparison.splitlines()[0]
     assert "cbor" in header and "json" in header and "thesis/cbor" in header
     assert "transport mean ms" in comparison and "table A.1 5b" in comparison

@@ -32,14 +32,19 @@ def test_ss_output_parses_into_sockets():
 
 def test_the_window_counts_what_the_stack_sent_and_sets_the_report_apart():
     before = parse_ss(SS_TEXT)
-    after = [SocketBytes(s.pids, s.local, s.peer, s.bytes_sent * 3, s.bytes_received)
-             for s in before]
+    after = [
+        SocketBytes(s.pids, s.local, s.peer, s.bytes_sent * 3, s.bytes_received) for s in before
+    ]
     after.append(SocketBytes((20,), "127.0.0.1:50004", "127.0.0.1:9090", 123, 0))  # new
     traffic = window_traffic(before, after, {10: "bridge", 20: "simulator"}, [99])
     # bridge -> simulator 10,000; simulator -> bridge 1,400 + 123 on a new socket;
     # bridge -> report (pid 99) 1,800 apart; the report's own 80 and sshd not at all
-    assert traffic == SocketTraffic(stack_bytes=10_000 + 1_400 + 123, instrument_bytes=1_800,
-                                    by_process={"bridge": 10_000, "simulator": 1_523}, sockets=4)
+    assert traffic == SocketTraffic(
+        stack_bytes=10_000 + 1_400 + 123,
+        instrument_bytes=1_800,
+        by_process={"bridge": 10_000, "simulator": 1_523},
+        sockets=4,
+    )
     assert window_traffic(before, after, {77: "bridge"}, [99]) is None
 
 

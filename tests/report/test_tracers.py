@@ -42,7 +42,8 @@ def test_publish_records_encode_and_send_with_wire_bytes():
     spans = tracer.spans.drain()
     assert [(s[0], s[1], s[2], s[4], s[5], s[7]) for s in spans] == [
         ("/imu/data", STAMP_NS, "encode", 10, 20, 400),
-        ("/imu/data", STAMP_NS, "send", 20, 35, 400)]
+        ("/imu/data", STAMP_NS, "send", 20, 35, 400),
+    ]
     assert tracer.counters["messages_out"] == 1 and tracer.counters["bytes_out"] == 400
 
 
@@ -58,11 +59,16 @@ def test_no_spans_for_telemetry_topics_or_unstamped_messages():
 def test_wait_starts_when_the_message_was_decoded():
     tracer = Tracer("navigation")
     tracer.received(Received("/lidar/points", STAMPED, 100, 4000), 150)
-    tracer.processed("/lidar/points", STAMP_NS, 170, 300, queued_ns=100,
-                     steps={"dbscan": (180, 250)})
+    tracer.processed(
+        "/lidar/points", STAMP_NS, 170, 300, queued_ns=100, steps={"dbscan": (180, 250)}
+    )
     stages = {s[2]: (s[4], s[5]) for s in tracer.spans.drain()}
-    assert stages == {"decode": (100, 150), "wait": (150, 170), "process": (170, 300),
-                      "process.dbscan": (180, 250)}
+    assert stages == {
+        "decode": (100, 150),
+        "wait": (150, 170),
+        "process": (170, 300),
+        "process.dbscan": (180, 250),
+    }
 
 
 def test_batch_message_carries_process_and_host():
@@ -82,17 +88,33 @@ def test_batches_and_stats_are_valid_messages(registry):
     assert checked["dropped"] == 4 and checked["rss_bytes"] > 0
 
 
-@pytest.mark.parametrize("type_name, msg", [
-    ("sensor_msgs/msg/Imu", {"header": {"frame_id": "imu"}}),
-    ("sensor_msgs/msg/PointCloud2", {"header": {"frame_id": "lidar"}, "width": 1000,
-                                     "height": 1, "point_step": 16, "row_step": 16000,
-                                     "data": bytes(16000),
-                                     "fields": [{"name": "x", "offset": 0, "datatype": 7,
-                                                 "count": 1}]}),
-    ("riverbridge_msgs/msg/RadarImage", {"header": {"frame_id": "radar"}, "num_beams": 3,
-                                         "num_cells": 5,
-                                         "reflectance": np.ones(15, np.float32)}),
-])
+@pytest.mark.parametrize(
+    "type_name, msg",
+    [
+        ("sensor_msgs/msg/Imu", {"header": {"frame_id": "imu"}}),
+        (
+            "sensor_msgs/msg/PointCloud2",
+            {
+                "header": {"frame_id": "lidar"},
+                "width": 1000,
+                "height": 1,
+                "point_step": 16,
+                "row_step": 16000,
+                "data": bytes(16000),
+                "fields": [{"name": "x", "offset": 0, "datatype": 7, "count": 1}],
+            },
+        ),
+        (
+            "riverbridge_msgs/msg/RadarImage",
+            {
+                "header": {"frame_id": "radar"},
+                "num_beams": 3,
+                "num_cells": 5,
+                "reflectance": np.ones(15, np.float32),
+            },
+        ),
+    ],
+)
 def test_cdr_size_equals_the_serialized_length(registry, type_name, msg):
     canonical = normalize(registry.message(type_name), msg, now_ns=0)
     assert cdr_size(registry, type_name, canonical) == len(to_cdr(registry, type_name, canonical))

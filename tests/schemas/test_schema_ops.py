@@ -36,8 +36,8 @@ CLIENT_FRAMES = {
     '"id": "send_action_goal:/fib:7", "action": "/fibonacci"}',
     "roslibpy set_level": '{"op": "set_level", "level": "error", "id": 1}',
     "roslibpy auth": '{"op": "auth", "mac": "ab12", "client": "192.168.1.101", '
-                     '"dest": "192.168.1.111", "rand": "xyz", "t": 1700000000.5, '
-                     '"level": "admin", "end": 1700003600}',
+    '"dest": "192.168.1.111", "rand": "xyz", "t": 1700000000.5, '
+    '"level": "admin", "end": 1700003600}',
     "roslibjs subscribe cbor": '{"op":"subscribe","id":"subscribe:/scan:0b1c","type":'
     '"sensor_msgs/msg/LaserScan","topic":"/scan","compression":"cbor","throttle_rate":0,'
     '"queue_length":0}',
@@ -291,12 +291,15 @@ def test_models_are_frozen():
         sub.topic = "/other"
 
 
-@pytest.mark.parametrize("obj", [
-    {"op": "publish", "topic": "/t", "msg": {"data": 1}},
-    {"op": "publish", "topic": "t", "msg": None, "id": "p:1", "latch": True},
-    {"op": "publish", "topic": "/t", "queue_size": 5, "type": "std_msgs/String", "extra": 1},
-    {"op": "publish", "topic": "/t", "msg": {}, "id": 7.5},
-])
+@pytest.mark.parametrize(
+    "obj",
+    [
+        {"op": "publish", "topic": "/t", "msg": {"data": 1}},
+        {"op": "publish", "topic": "t", "msg": None, "id": "p:1", "latch": True},
+        {"op": "publish", "topic": "/t", "queue_size": 5, "type": "std_msgs/String", "extra": 1},
+        {"op": "publish", "topic": "/t", "msg": {}, "id": 7.5},
+    ],
+)
 def test_parse_publish_reads_what_parse_op_reads(obj):
     fast, full = ops.parse_publish(obj), parse_op(obj)
     assert isinstance(fast, ops.PublishFields)
@@ -304,17 +307,20 @@ def test_parse_publish_reads_what_parse_op_reads(obj):
         assert getattr(fast, name) == getattr(full, name), name
 
 
-@pytest.mark.parametrize("obj", [
-    {"op": "publish", "topic": 5, "msg": {}},
-    {"op": "publish", "msg": {}},
-    {"op": "publish", "topic": "/t", "msg": [1, 2]},
-    {"op": "publish", "topic": "/t", "latch": 1},
-    {"op": "publish", "topic": "/t", "queue_size": True},
-    {"op": "publish", "topic": "/t", "type": 3},
-    {"op": "publish", "topic": "/t", "msg": {}, "id": {"any": "json"}},
-    {"op": "publish", "topic": "/t", "id": "i" * 301},
-    {"op": "publish", "topic": "/" + "t" * 600},
-])
+@pytest.mark.parametrize(
+    "obj",
+    [
+        {"op": "publish", "topic": 5, "msg": {}},
+        {"op": "publish", "msg": {}},
+        {"op": "publish", "topic": "/t", "msg": [1, 2]},
+        {"op": "publish", "topic": "/t", "latch": 1},
+        {"op": "publish", "topic": "/t", "queue_size": True},
+        {"op": "publish", "topic": "/t", "type": 3},
+        {"op": "publish", "topic": "/t", "msg": {}, "id": {"any": "json"}},
+        {"op": "publish", "topic": "/t", "id": "i" * 301},
+        {"op": "publish", "topic": "/" + "t" * 600},
+    ],
+)
 def test_parse_publish_refuses_like_parse_op(obj):
     with pytest.raises(OpError) as fast:
         ops.parse_publish(obj)

@@ -31,8 +31,11 @@ def test_background_threads_run_only_on_idle_cores() -> None:
         seen["before"] = os.sched_getscheduler(thread_id)
         background_priority()
         seen["after"] = os.sched_getscheduler(thread_id)
-        child = threading.Thread(target=lambda: seen.setdefault(
-            "child", os.sched_getscheduler(threading.get_native_id())))
+        child = threading.Thread(
+            target=lambda: seen.setdefault(
+                "child", os.sched_getscheduler(threading.get_native_id())
+            )
+        )
         child.start()
         child.join()
 
@@ -43,7 +46,8 @@ def test_background_threads_run_only_on_idle_cores() -> None:
     assert seen["after"] == os.SCHED_IDLE
     assert seen["child"] == os.SCHED_IDLE, "threads a background thread starts inherit it"
     assert os.sched_getscheduler(threading.get_native_id()) == os.SCHED_OTHER, (
-        "only the calling thread changes")
+        "only the calling thread changes"
+    )
 
 
 def test_openblas_is_kept_to_one_thread_for_the_whole_process() -> None:
@@ -58,8 +62,15 @@ def test_openblas_is_kept_to_one_thread_for_the_whole_process() -> None:
         " if p['user_api'] == 'blas']))\n"
     )
     env = {**os.environ, "OPENBLAS_NUM_THREADS": "2"}  # what a 2-core machine starts with
-    out = subprocess.run([sys.executable, "-c", probe], cwd=ROOT, env=env, check=True,
-                         capture_output=True, text=True, timeout=60).stdout
+    out = subprocess.run(
+        [sys.executable, "-c", probe],
+        cwd=ROOT,
+        env=env,
+        check=True,
+        capture_output=True,
+        text=True,
+        timeout=60,
+    ).stdout
     blas_threads = json.loads(out)
     assert blas_threads, "numpy's OpenBLAS was found"
     assert set(blas_threads) == {1}

@@ -23,8 +23,10 @@ def test_defaults_are_the_thesis_tables():
 
 def test_toml_overrides_and_keeps_defaults(tmp_path):
     path = tmp_path / "sim.toml"
-    path.write_text('seed = 3\n[lidar]\nrange_max_m = 120.0\n[lidar.mount]\nz_m = 4.0\n'
-                    '[vessel]\ncurrent_velocity_mps = [0.4, 0.0]\n')
+    path.write_text(
+        "seed = 3\n[lidar]\nrange_max_m = 120.0\n[lidar.mount]\nz_m = 4.0\n"
+        "[vessel]\ncurrent_velocity_mps = [0.4, 0.0]\n"
+    )
     cfg = load_config(path)
     assert cfg.seed == 3
     assert cfg.lidar.range_max_m == 120.0 and cfg.lidar.mount.z_m == 4.0
@@ -78,9 +80,11 @@ def test_odometry(check_canonical):
 def test_quaternion_from_matrix(yaw, pitch):
     x, y, z, w = quaternion_from_matrix(rotation_z(yaw) @ rotation_y(pitch))
     # Rebuild the matrix from the quaternion and compare.
-    rebuilt = np.array([
-        [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
-        [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
-        [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
-    ])
+    rebuilt = np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+            [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+            [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)],
+        ]
+    )
     np.testing.assert_allclose(rebuilt, rotation_z(yaw) @ rotation_y(pitch), atol=1e-12)

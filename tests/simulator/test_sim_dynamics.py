@@ -27,8 +27,9 @@ def terminal_surge_speed(cfg: VesselConfig, force_n: float) -> float:
 def test_constant_thrust_converges_to_the_analytic_terminal_speed(force_n):
     dynamics = VesselDynamics()
     result = run(dynamics, VesselState(), Command(force_n, 0.0), seconds=120.0)
-    assert result.state.u_mps == pytest.approx(terminal_surge_speed(dynamics.cfg, force_n),
-                                               rel=1e-6)
+    assert result.state.u_mps == pytest.approx(
+        terminal_surge_speed(dynamics.cfg, force_n), rel=1e-6
+    )
     assert result.state.v_mps == pytest.approx(0.0, abs=1e-12)
     assert result.state.y_m == pytest.approx(0.0, abs=1e-9)
     assert result.accel_body_mps2[0] == pytest.approx(0.0, abs=1e-6)
@@ -110,8 +111,10 @@ def test_no_collision_without_obstacles():
 
 
 def test_command_from_a_wrench_message():
-    wrench = {"force": {"x": 1200.0, "y": 5.0, "z": 0.0},
-              "torque": {"x": 0.0, "y": 0.0, "z": -300.0}}
+    wrench = {
+        "force": {"x": 1200.0, "y": 5.0, "z": 0.0},
+        "torque": {"x": 0.0, "y": 0.0, "z": -300.0},
+    }
     assert Command.from_wrench(wrench) == Command(1200.0, -300.0)
 
 

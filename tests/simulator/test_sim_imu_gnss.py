@@ -32,8 +32,9 @@ def test_imu_in_a_steady_turn_reads_the_centripetal_acceleration():
         state = result.state
     centred = Imu(ImuConfig(mount=MountConfig(x_m=0.0, y_m=0.0, z_m=0.5))).measure(result)
     assert centred.angular_velocity_radps[2] == pytest.approx(state.r_radps)
-    assert centred.linear_acceleration_mps2[1] == pytest.approx(state.u_mps * state.r_radps,
-                                                                rel=1e-3)
+    assert centred.linear_acceleration_mps2[1] == pytest.approx(
+        state.u_mps * state.r_radps, rel=1e-3
+    )
     # 2 m forward of the yaw axis adds -r^2 * 2 m along x (pointing back at the axis).
     forward = Imu(ImuConfig(mount=MountConfig(x_m=2.0, z_m=0.5))).measure(result)
     delta = forward.linear_acceleration_mps2 - centred.linear_acceleration_mps2

@@ -113,13 +113,19 @@ def test_pointcloud2_message(lidar, check_canonical):
     scene = box_scene((WALL_DISTANCE_M, -200.0, -50.0), (22.0, 200.0, 50.0))
     points = lidar.scan(scene, Pose2D(0, 0, 0))
     msg = lidar.message(points, stamp_ns=1_700_000_000_250_000_000)
-    assert msg["header"] == {"stamp": {"sec": 1_700_000_000, "nanosec": 250_000_000},
-                             "frame_id": "lidar"}
+    assert msg["header"] == {
+        "stamp": {"sec": 1_700_000_000, "nanosec": 250_000_000},
+        "frame_id": "lidar",
+    }
     assert msg["point_step"] == 16
     assert msg["row_step"] == 16 * len(points) == len(msg["data"])
     assert (msg["height"], msg["width"]) == (1, len(points))
     assert [(f["name"], f["offset"], f["datatype"], f["count"]) for f in msg["fields"]] == [
-        ("x", 0, 7, 1), ("y", 4, 7, 1), ("z", 8, 7, 1), ("intensity", 12, 7, 1)]
+        ("x", 0, 7, 1),
+        ("y", 4, 7, 1),
+        ("z", 8, 7, 1),
+        ("intensity", 12, 7, 1),
+    ]
     assert isinstance(msg["data"], bytes)
     np.testing.assert_array_equal(np.frombuffer(msg["data"], "<f4").reshape(-1, 4), points)
     check_canonical("sensor_msgs/msg/PointCloud2", msg)

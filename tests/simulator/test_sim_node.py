@@ -56,23 +56,32 @@ async def test_every_topic_arrives_typed_and_stamped(bridge, registry, encoding)
     scene = await asyncio.to_thread(build_scene, LIGHT.scene, seed=LIGHT.seed)
     stop = asyncio.Event()
     async with RosbridgeClient(bridge.url, encoding=encoding, registry=registry) as listener:
-        subs = {name: await listener.subscribe(topic, type_name, maxsize=100)
-                for name, (topic, type_name) in TOPICS.items()}
+        subs = {
+            name: await listener.subscribe(topic, type_name, maxsize=100)
+            for name, (topic, type_name) in TOPICS.items()
+        }
         static = await listener.subscribe(*TF_STATIC)
-        truth = {name: await listener.subscribe(*topic, maxsize=10)
-                 for name, topic in TRUTH_TOPICS.items()}
+        truth = {
+            name: await listener.subscribe(*topic, maxsize=10)
+            for name, topic in TRUTH_TOPICS.items()
+        }
         sim = asyncio.create_task(serve(bridge.url, LIGHT, stop, encoding=encoding, scene=scene))
         try:
             imu = await collect(subs["imu"], 20, timeout_s=10.0)
-            others = {name: await collect(subs[name], 1, timeout_s=10.0)
-                      for name in ("lidar", "radar", "camera", "gnss", "odom", "tf")}
+            others = {
+                name: await collect(subs[name], 1, timeout_s=10.0)
+                for name in ("lidar", "radar", "camera", "gnss", "odom", "tf")
+            }
             tf_static = await collect(static, 1, timeout_s=5.0)
             truths = {name: await collect(sub, 1, timeout_s=5.0) for name, sub in truth.items()}
             # latched: a late subscriber still gets the scene's objects
             markers = await collect(await listener.subscribe(*GROUND_TRUTH), 1, timeout_s=5.0)
-            publishers = {topic: (await listener.call_service(
-                "/rosapi/publishers", {"topic": topic}))["publishers"]
-                for topic in (TOPICS["lidar"][0], TOPICS["imu"][0], TOPICS["odom"][0])}
+            publishers = {
+                topic: (await listener.call_service("/rosapi/publishers", {"topic": topic}))[
+                    "publishers"
+                ]
+                for topic in (TOPICS["lidar"][0], TOPICS["imu"][0], TOPICS["odom"][0])
+            }
         finally:
             stop.set()
             await sim
@@ -108,8 +117,10 @@ async def test_wrench_command_drives_the_vessel(bridge, registry):
         sim = asyncio.create_task(serve(bridge.url, LIGHT, stop, scene=scene))
         try:
             assert await collect(odom, 1, timeout_s=10.0)
-            wrench = {"force": {"x": 3000.0, "y": 0.0, "z": 0.0},
-                      "torque": {"x": 0.0, "y": 0.0, "z": 0.0}}
+            wrench = {
+                "force": {"x": 3000.0, "y": 0.0, "z": 0.0},
+                "torque": {"x": 0.0, "y": 0.0, "z": 0.0},
+            }
             speed = 0.0
             async with asyncio.timeout(10.0):
                 while speed < 0.5:
@@ -125,14 +136,35 @@ async def test_wrench_command_drives_the_vessel(bridge, registry):
 
 async def test_cli_runs_for_a_duration_and_reports_an_unreachable_bridge(bridge, tmp_path):
     config = tmp_path / "sim.toml"
-    config.write_text("[scene]\nterrain_cells = 40\ntrees = 0\nhouses = 0\n"
-                      "[lidar]\nhorizontal_resolution_deg = 4.0\nvertical_resolution_deg = 4.0\n")
-    code = await asyncio.to_thread(main, ["--bridge", bridge.url, "--config", str(config),
-                                          "--duration", "1.0", "--log-level", "WARNING"])
+    config.write_text(
+        "[scene]\nterrain_cells = 40\ntrees = 0\nhouses = 0\n"
+        "[lidar]\nhorizontal_resolution_deg = 4.0\nvertical_resolution_deg = 4.0\n"
+    )
+    code = await asyncio.to_thread(
+        main,
+        [
+            "--bridge",
+            bridge.url,
+            "--config",
+            str(config),
+            "--duration",
+            "1.0",
+            "--log-level",
+            "WARNING",
+        ],
+    )
     assert code == 0
     bad = tmp_path / "bad.toml"
     bad.write_text("[lidar]\nrange_maximum = 3\n")
     assert await asyncio.to_thread(main, ["--config", str(bad)]) == 2
-    unreachable = ["--bridge", "ws://127.0.0.1:9", "--config", str(config),
-                   "--connect-timeout", "0.3", "--log-level", "CRITICAL"]
+    unreachable = [
+        "--bridge",
+        "ws://127.0.0.1:9",
+        "--config",
+        str(config),
+        "--connect-timeout",
+        "0.3",
+        "--log-level",
+        "CRITICAL",
+    ]
     assert await asyncio.to_thread(main, unreachable) == 1

@@ -21,7 +21,8 @@ def reflector_scene(range_m: float, azimuth_deg: float, vessel: Pose2D) -> Scene
     neighbouring beams (from +-2.5 deg) do not, and all 30 elevation rays reach it."""
     bearing = vessel.yaw_rad + np.radians(azimuth_deg)
     centre = np.array([vessel.x_m, vessel.y_m]) + (range_m + 0.5) * np.array(
-        [np.cos(bearing), np.sin(bearing)])
+        [np.cos(bearing), np.sin(bearing)]
+    )
     half_width_m = range_m * np.tan(np.radians(2.0))
     part = box_part((-0.5, -half_width_m, -20.0), (0.5, half_width_m, 20.0))
     c, s = np.cos(bearing), np.sin(bearing)
@@ -40,8 +41,10 @@ def test_geometry_follows_table_4_1():
     assert np.all(np.bincount(geometry.beam_index) == 60)
 
 
-@pytest.mark.parametrize(("range_m", "azimuth_deg", "yaw_rad"),
-                         [(50.0, 30.0, 0.0), (21.0, 200.0, 1.0), (90.0, 355.0, -2.5)])
+@pytest.mark.parametrize(
+    ("range_m", "azimuth_deg", "yaw_rad"),
+    [(50.0, 30.0, 0.0), (21.0, 200.0, 1.0), (90.0, 355.0, -2.5)],
+)
 def test_known_reflector_lands_in_its_cell(range_m, azimuth_deg, yaw_rad):
     vessel = Pose2D(12.0, -7.0, yaw_rad)
     radar = Radar(CFG)

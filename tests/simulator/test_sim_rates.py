@@ -37,14 +37,17 @@ def configured_rates_hz(cfg: SimConfig) -> dict[str, float]:
     return {key: config_value(cfg, CATALOGUE[key].rate_key) for key in TOPICS}
 
 
-async def record_stamps(url: str, registry, warmup_s: float,
-                        window_s: float) -> dict[str, list[float]]:
+async def record_stamps(
+    url: str, registry, warmup_s: float, window_s: float
+) -> dict[str, list[float]]:
     """Capture stamps (s) of every simulator topic received during `window_s` after
     `warmup_s`; every subscription queue is deep enough never to drop."""
     stamps: dict[str, list[float]] = {name: [] for name in TOPICS}
     async with RosbridgeClient(url, registry=registry, connect_timeout=30) as listener:
-        subs = {name: await listener.subscribe(topic, type_name, maxsize=10_000)
-                for name, (topic, type_name) in TOPICS.items()}
+        subs = {
+            name: await listener.subscribe(topic, type_name, maxsize=10_000)
+            for name, (topic, type_name) in TOPICS.items()
+        }
         recording = asyncio.Event()
 
         async def consume(name: str) -> None:
@@ -78,8 +81,10 @@ async def test_every_sensor_topic_arrives_at_its_configured_rate(registry):
         stamps = await record_stamps(url, registry, WARMUP_S, WINDOW_S)
         assert sim.process.poll() is None, sim.text()
     measured = {name: rate_hz(stamps[name]) for name in expected}
-    report = {name: f"{measured[name]:.2f}/{expected[name]:g} Hz ({len(stamps[name])} msgs)"
-              for name in expected}
+    report = {
+        name: f"{measured[name]:.2f}/{expected[name]:g} Hz ({len(stamps[name])} msgs)"
+        for name in expected
+    }
     report["load average"] = f"{os.getloadavg()[0]:.1f} on {os.cpu_count()} CPUs"
     for name, hz in expected.items():
         assert measured[name] == pytest.approx(hz, rel=TOLERANCE), report

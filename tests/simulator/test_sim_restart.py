@@ -39,8 +39,7 @@ async def first_of_each(url: str, registry, timeout_s: float) -> dict[str, dict]
     """The first message of every simulator topic (and the latched /tf_static)."""
     topics = {**TOPICS, "tf_static": CATALOGUE["tf_static"].pair}
     async with RosbridgeClient(url, registry=registry, connect_timeout=timeout_s) as listener:
-        subs = {name: await listener.subscribe(*topic, maxsize=1)
-                for name, topic in topics.items()}
+        subs = {name: await listener.subscribe(*topic, maxsize=1) for name, topic in topics.items()}
 
         async def first(name: str) -> tuple[str, dict | None]:
             try:

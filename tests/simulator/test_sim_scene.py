@@ -125,8 +125,7 @@ def test_loaded_terrain_scene(tmp_path):
     bowl = 0.01 * ((gx - 30) ** 2 + (gy - 40) ** 2)
     path = tmp_path / "bowl.xyz"
     save_xyz(HeightField(bowl.astype(np.float32), 1.0, 384_000.0, 5_719_000.0), path)
-    scene = build_scene(SceneConfig(terrain_source=str(path), terrain_cells=60,
-                                    water_level_m=5.0))
+    scene = build_scene(SceneConfig(terrain_source=str(path), terrain_cells=60, water_level_m=5.0))
     assert scene.water_level_m == 5.0
     # Centred map frame: the bowl's bottom (30, 40) of a 60 m grid sits at (0, 10).
     assert (scene.start_pose.x_m, scene.start_pose.y_m) == pytest.approx((0.0, 10.0), abs=1.0)
@@ -144,10 +143,12 @@ def test_scene_arrays_are_read_only(small_scene):
 
 
 def test_scene_from_parts_keeps_each_part_material():
-    lower = MeshPart(np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]]), np.array([[0, 1, 2]]),
-                     materials.GRASS)
-    upper = MeshPart(np.array([[0, 0, 1], [1, 0, 1], [0, 1, 1]]), np.array([[0, 1, 2]]),
-                     materials.VESSEL)
+    lower = MeshPart(
+        np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]]), np.array([[0, 1, 2]]), materials.GRASS
+    )
+    upper = MeshPart(
+        np.array([[0, 0, 1], [1, 0, 1], [0, 1, 1]]), np.array([[0, 1, 2]]), materials.VESSEL
+    )
     scene = Scene([lower, upper], water_level_m=0.0)
     np.testing.assert_array_equal(scene.faces, [[0, 1, 2], [3, 4, 5]])
     np.testing.assert_array_equal(scene.radar_reflectance, [0.5, 100.0])

@@ -27,9 +27,10 @@ from simulator.node import SimulatorNode
 from simulator.sensor import Capture, Generated, Schedule
 from simulator.sensors import build_sensors, static_transforms
 
-LIGHT = SimConfig(lidar=LidarConfig(horizontal_resolution_deg=2.0, vertical_resolution_deg=2.0,
-                                    rate_hz=10.0),
-                  camera=CameraConfig(width_px=80, height_px=60))
+LIGHT = SimConfig(
+    lidar=LidarConfig(horizontal_resolution_deg=2.0, vertical_resolution_deg=2.0, rate_hz=10.0),
+    camera=CameraConfig(width_px=80, height_px=60),
+)
 STAMP_NS = 1_500_000_000
 
 
@@ -39,8 +40,9 @@ def capture_at_start(scene) -> Capture:
 
 
 @pytest.mark.parametrize("truth", [True, False])
-def test_every_sensor_makes_its_topics_type_at_the_capture_time(small_scene, check_canonical,
-                                                                truth):
+def test_every_sensor_makes_its_topics_type_at_the_capture_time(
+    small_scene, check_canonical, truth
+):
     cfg = LIGHT.model_copy(update={"ground_truth": GroundTruthConfig(enabled=truth)})
     sensors = build_sensors(cfg, small_scene)
     truths = {}
@@ -92,8 +94,15 @@ class Probe:
 
 
 def probe_topic(key: str, role: Role, rate_key: str) -> Topic:
-    return Topic(key, f"/test/{key}", "std_msgs/msg/String", "simulator", role, "a test probe",
-                 rate_key=rate_key)
+    return Topic(
+        key,
+        f"/test/{key}",
+        "std_msgs/msg/String",
+        "simulator",
+        role,
+        "a test probe",
+        rate_key=rate_key,
+    )
 
 
 @pytest.mark.slow
@@ -105,11 +114,14 @@ async def test_a_new_sensor_runs_on_its_schedule_by_being_passed_to_the_node(sma
     slow = Probe(probe_topic("slow_probe", "sensor", "lidar.rate_hz"), "worker", delay_s=0.25)
     received: dict[str, list[str]] = {"timer_probe": [], "slow_probe": []}
     stop = asyncio.Event()
-    async with (run_bridge(BridgeConfig(host="127.0.0.1", port=0)) as bridge,
-                RosbridgeClient(bridge.url, name="sim") as client,
-                RosbridgeClient(bridge.url, name="listener") as listener):
-        subs = {p.topic.key: await listener.subscribe(*p.topic.pair, maxsize=100)
-                for p in (timer, slow)}
+    async with (
+        run_bridge(BridgeConfig(host="127.0.0.1", port=0)) as bridge,
+        RosbridgeClient(bridge.url, name="sim") as client,
+        RosbridgeClient(bridge.url, name="listener") as listener,
+    ):
+        subs = {
+            p.topic.key: await listener.subscribe(*p.topic.pair, maxsize=100) for p in (timer, slow)
+        }
         node = SimulatorNode(client, cfg, small_scene, sensors=[timer, slow])
         task = asyncio.create_task(node.run(stop))
 

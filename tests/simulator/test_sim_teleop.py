@@ -31,10 +31,25 @@ SCALE = TeleopScale(max_surge_force_n=4000.0, max_yaw_moment_nm=6000.0, steps=10
 def test_arrows_wasd_space_and_quit_decode():
     keys = b"\x1b[A\x1b[B\x1b[C\x1b[D\x1bOA wWsSaAdDqQ\x03\x04"
     assert KeyDecoder().feed(keys) == [
-        Action.SURGE_UP, Action.SURGE_DOWN, Action.YAW_RIGHT, Action.YAW_LEFT,
-        Action.SURGE_UP, Action.STOP, Action.SURGE_UP, Action.SURGE_UP, Action.SURGE_DOWN,
-        Action.SURGE_DOWN, Action.YAW_LEFT, Action.YAW_LEFT, Action.YAW_RIGHT, Action.YAW_RIGHT,
-        Action.QUIT, Action.QUIT, Action.QUIT, Action.QUIT]
+        Action.SURGE_UP,
+        Action.SURGE_DOWN,
+        Action.YAW_RIGHT,
+        Action.YAW_LEFT,
+        Action.SURGE_UP,
+        Action.STOP,
+        Action.SURGE_UP,
+        Action.SURGE_UP,
+        Action.SURGE_DOWN,
+        Action.SURGE_DOWN,
+        Action.YAW_LEFT,
+        Action.YAW_LEFT,
+        Action.YAW_RIGHT,
+        Action.YAW_RIGHT,
+        Action.QUIT,
+        Action.QUIT,
+        Action.QUIT,
+        Action.QUIT,
+    ]
 
 
 def test_escape_sequence_split_across_reads_is_kept():
@@ -58,10 +73,13 @@ def press(*actions: Action, start: TeleopCommand | None = None) -> TeleopCommand
 
 def test_steps_raise_and_lower_surge_and_yaw():
     command = press(Action.SURGE_UP, Action.SURGE_UP, Action.SURGE_UP, Action.YAW_RIGHT)
-    assert command.wrench(SCALE) == {"force": {"x": 1200.0, "y": 0.0, "z": 0.0},
-                                     "torque": {"x": 0.0, "y": 0.0, "z": -600.0}}
-    back = press(Action.SURGE_DOWN, Action.SURGE_DOWN, Action.SURGE_DOWN, Action.YAW_LEFT,
-                 start=command)
+    assert command.wrench(SCALE) == {
+        "force": {"x": 1200.0, "y": 0.0, "z": 0.0},
+        "torque": {"x": 0.0, "y": 0.0, "z": -600.0},
+    }
+    back = press(
+        Action.SURGE_DOWN, Action.SURGE_DOWN, Action.SURGE_DOWN, Action.YAW_LEFT, start=command
+    )
     assert back == TeleopCommand()
     astern = press(Action.SURGE_DOWN, Action.YAW_LEFT, Action.YAW_LEFT)
     assert astern.surge_force_n(SCALE) == -400.0 and astern.yaw_moment_nm(SCALE) == 1200.0
@@ -123,8 +141,9 @@ async def next_wrench(sub, timeout_s: float = 10.0) -> tuple[float, float]:
         return wrench_values((await anext(sub)).msg)
 
 
-async def wrench_changes(sub, start: tuple[float, float],
-                         last: tuple[float, float]) -> list[tuple[float, float]]:
+async def wrench_changes(
+    sub, start: tuple[float, float], last: tuple[float, float]
+) -> list[tuple[float, float]]:
     """The successive distinct wrench values after `start` (repeats sent at the steady rate
     are skipped), up to and including `last`."""
     changes = [start]
@@ -138,18 +157,24 @@ async def wrench_changes(sub, start: tuple[float, float],
 @pytest.mark.slow
 async def test_cli_publishes_on_keys_steadily_and_zero_on_quit(monkeypatch, registry):
     read_fd, write_fd = os.pipe()
-    async with (run_bridge(BridgeConfig(host="127.0.0.1", port=0)) as bridge,
-                RosbridgeClient(bridge.url, registry=registry) as listener):
+    async with (
+        run_bridge(BridgeConfig(host="127.0.0.1", port=0)) as bridge,
+        RosbridgeClient(bridge.url, registry=registry) as listener,
+    ):
         sub = await listener.subscribe(*TOPICS["cmd_wrench"].pair, maxsize=1000)
         with os.fdopen(read_fd) as keys_in:
             monkeypatch.setattr(sys, "stdin", keys_in)
-            cli = asyncio.create_task(asyncio.to_thread(
-                main, ["--bridge", bridge.url, "--stdin-keys", "--rate", "10"]))
+            cli = asyncio.create_task(
+                asyncio.to_thread(main, ["--bridge", bridge.url, "--stdin-keys", "--rate", "10"])
+            )
             try:
                 assert await next_wrench(sub) == (0.0, 0.0)
                 os.write(write_fd, b"ww\x1b[C")
                 assert await wrench_changes(sub, (0.0, 0.0), (800.0, -600.0)) == [
-                    (400.0, 0.0), (800.0, 0.0), (800.0, -600.0)]
+                    (400.0, 0.0),
+                    (800.0, 0.0),
+                    (800.0, -600.0),
+                ]
                 # no keys for a while: the command keeps coming at the steady rate
                 repeats = [await next_wrench(sub) for _ in range(5)]
                 assert repeats == [(800.0, -600.0)] * 5
@@ -200,10 +225,23 @@ async def test_teleop_in_a_terminal_steers_the_simulated_vessel(tmp_path, regist
     try:
         with running_bridge() as (_, url), running(simulator_argv(url, config)) as sim:
             teleop = subprocess.Popen(
-                [sys.executable, "-m", "simulator.teleop_cli", "--bridge", url,
-                 "--config", str(config), "--connect-timeout", "60"],
-                cwd=REPO_ROOT, stdin=terminal, stdout=terminal, stderr=terminal,
-                env={**os.environ, "PYTHONPATH": str(REPO_ROOT)})
+                [
+                    sys.executable,
+                    "-m",
+                    "simulator.teleop_cli",
+                    "--bridge",
+                    url,
+                    "--config",
+                    str(config),
+                    "--connect-timeout",
+                    "60",
+                ],
+                cwd=REPO_ROOT,
+                stdin=terminal,
+                stdout=terminal,
+                stderr=terminal,
+                env={**os.environ, "PYTHONPATH": str(REPO_ROOT)},
+            )
             try:
                 async with RosbridgeClient(url, registry=registry, connect_timeout=60) as c:
                     odom = await c.subscribe(*TOPICS["odom"].pair, maxsize=1000)

@@ -28,8 +28,14 @@ def post_scene(x_m: float = 30.0) -> Scene:
     """A 2 m x 4 m x 10 m post (object 0) standing in water, east of the origin (4 m wide:
     both rays of a 5 deg radar beam, +-1.25 deg, hit it out to 90 m)."""
     post = box_part((x_m - 1.0, -2.0, -1.0), (x_m + 1.0, 2.0, 9.0))
-    objects = object_boxes("post", post.vertices, np.zeros(len(post.vertices), int),
-                           np.array([[x_m, 0.0, 0.0]]), np.zeros(1), first_id=POST_ID)
+    objects = object_boxes(
+        "post",
+        post.vertices,
+        np.zeros(len(post.vertices), int),
+        np.array([[x_m, 0.0, 0.0]]),
+        np.zeros(1),
+        first_id=POST_ID,
+    )
     tagged = MeshPart(post.vertices, post.faces, post.material, np.zeros(len(post.faces), int))
     return Scene([tagged, water_plane()], water_level_m=0.0, objects=objects)
 
@@ -39,7 +45,11 @@ def test_every_prop_of_the_thesis_scene_is_an_object_with_a_box():
     objects = scene.objects
     kinds, counts = np.unique(objects.kinds.astype(str), return_counts=True)
     assert dict(zip(kinds, counts, strict=True)) == {  # thesis 3.5.1 and SceneConfig
-        "house": 30, "landing_stage": 5, "tree": 160, "vessel": 2}
+        "house": 30,
+        "landing_stage": 5,
+        "tree": 160,
+        "vessel": 2,
+    }
     np.testing.assert_array_equal(objects.ids, np.arange(len(objects)))
     tagged = np.unique(scene.face_source[scene.face_source >= 0])
     np.testing.assert_array_equal(tagged, objects.ids)
@@ -53,8 +63,14 @@ def test_object_boxes_follow_the_instance_yaw():
     corners = np.array([[-2.0, -1.0, 0.0], [2.0, 1.0, 3.0]])
     yaw = np.pi / 2  # turned: its 4 m side now runs along map y
     rotated = corners @ np.array([[0.0, 1.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
-    boxes = object_boxes("box", rotated + np.array([10.0, 5.0, 0.0]), np.zeros(2, int),
-                         np.array([[10.0, 5.0, 0.0]]), np.array([yaw]), first_id=3)
+    boxes = object_boxes(
+        "box",
+        rotated + np.array([10.0, 5.0, 0.0]),
+        np.zeros(2, int),
+        np.array([[10.0, 5.0, 0.0]]),
+        np.array([yaw]),
+        first_id=3,
+    )
     np.testing.assert_allclose(boxes.size_xyz[0], [4.0, 2.0, 3.0], atol=1e-9)
     np.testing.assert_allclose(boxes.centre_xyz[0], [10.0, 5.0, 1.5], atol=1e-9)
     assert boxes.ids[0] == 3
@@ -79,7 +95,8 @@ def test_lidar_points_know_what_they_hit_and_the_truth_lists_the_object(check_ca
     assert (post["id"], post["kind"], post["returns"]) == (POST_ID, "post", int(on_post.sum()))
     # sensor 3 m above the water: the post's centre (4 m above the water) is 1 m above it
     assert (post["center"]["x"], post["center"]["y"], post["center"]["z"]) == pytest.approx(
-        (30.0, 0.0, 1.0))
+        (30.0, 0.0, 1.0)
+    )
     assert post["range_m"] == pytest.approx(30.0)
     assert msg["num_beams"] == 0 and len(msg["cell_source"]) == 0
 
@@ -105,15 +122,19 @@ def test_radar_cells_know_their_strongest_source(check_canonical):
     assert msg["cell_source"].reshape(72, 25)[0, 12] == POST_ID
 
 
-@pytest.mark.parametrize(("model", "pitch_deg", "returns"), [
-    ("mesh", 0.0, True),  # the thesis's collision mesh: every ray on the water returns
-    ("specular", 0.0, False),  # a level sensor meets the water at >= 60 deg: mirrored away
-    ("specular", 80.0, True),  # looking almost straight down, the rays near nadir return
-])
+@pytest.mark.parametrize(
+    ("model", "pitch_deg", "returns"),
+    [
+        ("mesh", 0.0, True),  # the thesis's collision mesh: every ray on the water returns
+        ("specular", 0.0, False),  # a level sensor meets the water at >= 60 deg: mirrored away
+        ("specular", 80.0, True),  # looking almost straight down, the rays near nadir return
+    ],
+)
 def test_water_models(model, pitch_deg, returns):
     scene = Scene([water_plane()], water_level_m=0.0)
-    cfg = LidarConfig(water_model=model, range_max_m=30.0,
-                      mount=MountConfig(z_m=3.0, pitch_deg=pitch_deg))
+    cfg = LidarConfig(
+        water_model=model, range_max_m=30.0, mount=MountConfig(z_m=3.0, pitch_deg=pitch_deg)
+    )
     lidar = Lidar(cfg, threads=1)
     try:
         scan = lidar.scan_with_sources(scene, Pose2D(0.0, 0.0, 0.0))
@@ -123,8 +144,7 @@ def test_water_models(model, pitch_deg, returns):
     assert (scan.source == WATER).all()
     if model == "specular" and returns:
         in_map = scan.points[:, :3] @ rotation_y(np.radians(pitch_deg)).T
-        incidence_deg = np.degrees(np.arccos(np.abs(in_map[:, 2])
-                                             / np.linalg.norm(in_map, axis=1)))
+        incidence_deg = np.degrees(np.arccos(np.abs(in_map[:, 2]) / np.linalg.norm(in_map, axis=1)))
         assert incidence_deg.max() <= cfg.water_max_incidence_deg + 0.01
 
 
@@ -164,11 +184,17 @@ def test_the_thesis_profile_sends_about_the_thesis_lidar_payload():
 
 
 def test_markers_show_every_object_in_the_map_frame(check_canonical):
-    objects = SceneObjects(np.array([0, 1]), np.array(["tree", "house"], dtype=object),
-                           np.array([[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]]), np.array([0.0, 1.0]),
-                           np.array([[1.0, 1.0, 5.0], [10.0, 8.0, 9.5]]))
+    objects = SceneObjects(
+        np.array([0, 1]),
+        np.array(["tree", "house"], dtype=object),
+        np.array([[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]]),
+        np.array([0.0, 1.0]),
+        np.array([[1.0, 1.0, 5.0], [10.0, 8.0, 9.5]]),
+    )
     msg = markers_msg(objects, 11)
     check_canonical("visualization_msgs/msg/MarkerArray", msg)
     assert [(m["ns"], m["id"], m["header"]["frame_id"]) for m in msg["markers"]] == [
-        ("tree", 0, "map"), ("house", 1, "map")]
+        ("tree", 0, "map"),
+        ("house", 1, "map"),
+    ]
     assert msg["markers"][1]["scale"] == {"x": 10.0, "y": 8.0, "z": 9.5}
