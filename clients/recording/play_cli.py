@@ -23,9 +23,9 @@ from mcap.reader import SeekingReader
 
 from clients.errors import ConnectionFailed
 from clients.recording.player import STAMP_MODES, Player, PlayStats
-from clients.recording.record_cli import non_negative_seconds, topic_pattern, ws_url
+from clients.recording.record_cli import topic_pattern, ws_url
 from clients.recording.topics import BRIDGE_OWNED, TopicFilter
-from clients.stack.node_cli import run_until_stopped
+from clients.stack.node_cli import add_client_arguments, non_negative_seconds, run_until_stopped
 
 log = logging.getLogger("clients.recording")
 
@@ -102,16 +102,7 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="S",
         help="stop after S seconds (default 0: at the end, or never with --loop)",
     )
-    parser.add_argument(
-        "--connect-timeout",
-        type=non_negative_seconds,
-        default=10.0,
-        metavar="S",
-        help="seconds to keep trying to reach the bridge",
-    )
-    parser.add_argument(
-        "--log-level", default="INFO", choices=("DEBUG", "INFO", "WARNING", "ERROR")
-    )
+    add_client_arguments(parser)
     return parser
 
 

@@ -21,7 +21,7 @@ from clients.errors import ConnectionFailed
 from clients.recording.mcap_file import COMPRESSIONS, TopicCounts
 from clients.recording.recorder import Recorder
 from clients.recording.topics import TopicFilter, check_patterns
-from clients.stack.node_cli import run_until_stopped
+from clients.stack.node_cli import add_client_arguments, non_negative_seconds, run_until_stopped
 
 log = logging.getLogger("clients.recording")
 
@@ -44,16 +44,6 @@ def topic_pattern(text: str) -> str:
         return check_patterns([text])[0]
     except ValueError as exc:
         raise argparse.ArgumentTypeError(str(exc)) from None
-
-
-def non_negative_seconds(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number of seconds: {text!r}") from None
-    if not value >= 0:
-        raise argparse.ArgumentTypeError(f"must be 0 or more, got {text}")
-    return value
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -100,16 +90,7 @@ def build_parser() -> argparse.ArgumentParser:
         default="zstd",
         help="chunk compression (default %(default)s)",
     )
-    parser.add_argument(
-        "--connect-timeout",
-        type=non_negative_seconds,
-        default=10.0,
-        metavar="S",
-        help="seconds to keep trying to reach the bridge",
-    )
-    parser.add_argument(
-        "--log-level", default="INFO", choices=("DEBUG", "INFO", "WARNING", "ERROR")
-    )
+    add_client_arguments(parser)
     return parser
 
 

@@ -26,17 +26,39 @@ def add_node_arguments(parser: argparse.ArgumentParser, config_tables: str) -> N
     parser.add_argument("--encoding", choices=("cbor", "json"), default="cbor")
     parser.add_argument(
         "--duration",
-        type=float,
+        type=non_negative_seconds,
         default=0.0,
         help="stop after this many seconds (0: run until SIGINT/SIGTERM)",
     )
+    add_client_arguments(parser)
+
+
+LOG_LEVELS = ("DEBUG", "INFO", "WARNING", "ERROR", "CRITICAL")
+
+
+def non_negative_seconds(text: str) -> float:
+    """An argparse type: a number of seconds, 0 or more (NaN refused)."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number of seconds: {text!r}") from None
+    if not value >= 0:
+        raise argparse.ArgumentTypeError(f"must be 0 or more, got {text}")
+    return value
+
+
+def add_client_arguments(parser: argparse.ArgumentParser) -> None:
+    """--connect-timeout and --log-level, as every riverbridge client command takes them."""
     parser.add_argument(
         "--connect-timeout",
-        type=float,
+        type=non_negative_seconds,
         default=10.0,
-        help="seconds to keep retrying the first connection",
+        metavar="S",
+        help="seconds to keep trying to reach the bridge (default %(default)s)",
     )
-    parser.add_argument("--log-level", default="INFO")
+    parser.add_argument(
+        "--log-level", type=str.upper, default="INFO", choices=LOG_LEVELS, metavar="LEVEL"
+    )
 
 
 async def run_until_stopped(
