@@ -22,7 +22,8 @@ from schemas.tracing import header_stamp_ns
 from schemas.values import JsonObject, Message
 
 
-@dataclass(frozen=True, slots=True)
+# Not frozen, like bridge.inbound.InboundFrame: one per published message; treat as immutable.
+@dataclass(slots=True)
 class ValidMessage:
     """A message in canonical form for `spec`, with the figures derived from it.
 
