@@ -1,10 +1,10 @@
 """What the bridge's sans-I/O core costs per published frame, without sockets or an event loop.
 
 `BridgeCore.receive` is called directly with a ~100-byte ``std_msgs/String`` publish (JSON
-as a binary frame, as ROS# sends it, and CBOR) while 1 or 10 clients subscribe; the effects it returns are dropped, so this is
-the core's share of the relay benchmark's per-message time (decode, checks, typed dispatch,
-validation, fan-out), the part the bridge's own code decides. Prints the median over
-``--repeat`` batches of the mean microseconds per frame, and frames/s.
+as a binary frame, as ROS# sends it, and CBOR) while 1 or 10 clients subscribe; the effects
+it returns are dropped, so this is the core's share of the relay benchmark's per-message time
+(decode, checks, typed dispatch, validation, fan-out), the part the bridge's own code decides.
+Prints the median over ``--repeat`` batches of the mean microseconds per frame, and frames/s.
 
 Measured here (quiet, load < 0.3; two runs each, µs per frame, JSON / CBOR, 1 subscriber):
 the session's start (a243925) 9.0-9.9 / 9.7-10.2; with typed routes and the frame's facts
