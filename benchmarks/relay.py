@@ -26,18 +26,19 @@ With --repeat, --compare (another checkout's bridge) or --floor (a bare websocke
 forwards frames unvalidated), the relays run interleaved and the medians are printed side by
 side with their ratios to this checkout's bridge.
 
-Measured here (2 cores shared with other work; `--compare /work/main --floor --repeat 3`, load
-1.2-3.4; medians of 3 interleaved runs; main = the bridge before issue 11):
+Measured here, quiet (`--compare <checkout> --floor --repeat 3`, load 0.02-2.3 from the
+benchmark itself; two sittings, medians of 3 interleaved runs each; "before" = the bridge
+before issue 11, measured in an earlier sitting at load 1.2-3.4):
 
-    workload                 this bridge             main (before)           bare relay (floor)
-    burst JSON delivered     15,000, 29,400/s        ~255 (98.3 % lost)      15,000, 24,600/s
-    burst CBOR delivered     15,000, 20,800/s        ~225 (98.5 % lost)      15,000, 9,800/s
-    sustained JSON           26,600 msg/s, lossless  320 msg/s (99 % lost)   10,100 msg/s
-    sustained CBOR           28,000 msg/s, lossless  350 msg/s (99 % lost)   6,200 msg/s
-    scan+IMU JSON            scan p50 35.1 ms,       39.5 ms, 22.0 ms        30.1 ms, 9.3 ms
-                             IMU p99 11.4 ms
-    scan+IMU CBOR            scan p50 13.5 ms,       16.0 ms, 6.0 ms         13.5 ms, 5.8 ms
-                             IMU p99 5.5 ms
+    workload          this bridge                before               bare relay (floor)
+    burst JSON        15,000; 27,600-36,900/s    ~255 (98.3 % lost)   15,000; 46,100-53,400/s
+    burst CBOR        15,000; 29,400-32,700/s    ~225 (98.5 % lost)   15,000; 40,900-46,900/s
+    sustained JSON    35,300-37,800/s, lossless  320/s (99 % lost)    58,700-60,600/s
+    sustained CBOR    34,700-35,200/s, lossless  350/s (99 % lost)    56,300-59,800/s
+    scan+IMU JSON     scan p50 30.5-33.7 ms,     39.5 ms, 22.0 ms     29.3-31.4 ms, 7.0-7.1 ms
+                      IMU p99 7.4-9.2 ms
+    scan+IMU CBOR     scan p50 12.1-14.4 ms,     16.0 ms, 6.0 ms      11.9-12.5 ms, 2.2 ms
+                      IMU p99 3.2-4.0 ms
 
 The bare relay forwards the publisher's frame as it came and validates nothing: on one
 connection its scan and IMU figures are what the clients, the copies and the kernel cost here.
