@@ -46,13 +46,8 @@ from clients.report.plots import write_plots
 from clients.report.results import Run, json_ready
 from clients.report.stats import SENSOR_TOPICS
 from clients.report.text import render_comparison, render_run
-from clients.stack.launcher import (
-    SIMULATOR_TOPICS,
-    LaunchConfig,
-    PrefixedOutput,
-    Supervisor,
-    stack_components,
-)
+from clients.stack.launcher import SIMULATOR_TOPICS, LaunchConfig, Supervisor, stack_components
+from clients.stack.output import PrefixedOutput
 from clients.stack.up_cli import positive_seconds
 
 log = logging.getLogger(__name__)

@@ -1,6 +1,7 @@
 """Supervise the bridge, the simulator and the navigation service as three local processes.
 
-Design (asyncio subprocesses, one event loop, no threads of our own):
+Design (asyncio subprocesses, one event loop, no threads of our own; one child's process in
+:mod:`clients.stack.child`, the shared output in :mod:`clients.stack.output`):
 
 - Each component runs as ``sys.executable -m <package> ...`` in its own process group
   (``process_group=0``), so a terminal's Ctrl-C reaches only the supervisor, which then stops
@@ -29,34 +30,29 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
-import ctypes
-import ctypes.util
 import logging
 import os
-import re
 import signal
-import sys
 import time
 from collections.abc import Awaitable, Callable, Mapping, Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import replace
 from pathlib import Path
-from typing import Literal, TextIO, TypeVar
+from typing import Literal, TypeVar
 
 from pydantic import BaseModel, ConfigDict, Field, SecretStr
 
 from clients.client import RosbridgeClient
 from clients.connection import AUTH_SECRET_ENV, TransportConfig
 from clients.errors import RosbridgeError
+from clients.stack.child import BRIDGE_URL, Child, Component, describe_exit
 from clients.stack.healthcheck import Unhealthy, fetch_version, missing_publishers
+from clients.stack.output import PrefixedOutput
 from clients.stack.restarts import RestartBackoff, RestartLedger, RestartMode, RestartPolicy
 from schemas.catalogue import streams_of
 from schemas.rosauth import read_secret
 
 log = logging.getLogger(__name__)
 T = TypeVar("T")
-
-BRIDGE_URL = "{bridge_url}"
-"""Placeholder in a component's arguments, replaced by the bridge's URL once it listens."""
 
 # Ready when these have publishers: what each always streams (schemas.catalogue).
 SIMULATOR_TOPICS = streams_of("simulator")
@@ -70,12 +66,8 @@ MALLOC_ENV: Mapping[str, str] = {
     "MALLOC_TOP_PAD_": "67108864",
 }
 
-_LISTENING = re.compile(rb"listening on wss?://(?P<host>\S+?):(?P<port>\d+)")
 _POLL_S = 0.25  # readiness probe period: cheap (one rosapi round trip per topic)
-_EXIT_POLL_S = 0.05  # how often a child's exit is looked for (see Child.wait)
-_LINE_LIMIT = 1 << 20  # longest log line read in one piece; longer ones are split
 _WILDCARD_TO_LOOPBACK = {"0.0.0.0": "127.0.0.1", "": "127.0.0.1", "::": "::1"}
-_COLOURS = {"bridge": "36", "sim": "32", "nav": "35", "up": "1"}  # ANSI: cyan, green, magenta
 
 
 class LaunchConfig(BaseModel):
@@ -125,26 +117,6 @@ class LaunchConfig(BaseModel):
         if self.max_clients is not None:
             args += ["--max-clients", str(self.max_clients)]
         return args
-
-
-@dataclass(frozen=True)
-class Component:
-    """One child process: ``python -m module *args``; ready when ``topics`` have publishers
-    (for the bridge, which has none: when it listens and answers ``/version``)."""
-
-    name: str
-    title: str
-    module: str
-    args: tuple[str, ...]
-    topics: tuple[str, ...] = ()
-
-    def argv(self, bridge_url: str = "") -> list[str]:
-        return [
-            sys.executable,
-            "-m",
-            self.module,
-            *(arg.replace(BRIDGE_URL, bridge_url) for arg in self.args),
-        ]
 
 
 def stack_components(config: LaunchConfig) -> tuple[Component, ...]:
@@ -217,14 +189,6 @@ def with_port(component: Component, port: int) -> Component:
     return replace(component, args=tuple(args))
 
 
-def describe_exit(title: str, code: int) -> str:
-    """``"simulator exited with code 3"`` or ``"... was killed by SIGKILL (exit code -9)"``."""
-    if code < 0:
-        with contextlib.suppress(ValueError):
-            return f"{title} was killed by {signal.Signals(-code).name} (exit code {code})"
-    return f"{title} exited with code {code}"
-
-
 class ComponentDied(RuntimeError):
     """A component exited while the stack was starting or running."""
 
@@ -239,159 +203,6 @@ class StartupTimeout(RuntimeError):
 
 class StopRequested(Exception):
     """The supervisor was asked to stop (signal) before the stack was ready."""
-
-
-# --------------------------------------------------------------------------- output
-
-
-class PrefixedOutput:
-    """Writes ``[name] line`` to one stream, flushed per line; ANSI colour only on a TTY."""
-
-    def __init__(self, stream: TextIO, colour: bool | None = None) -> None:
-        self._stream: TextIO | None = stream
-        self._colour = stream.isatty() if colour is None else colour
-        self._width = max(len(name) for name in _COLOURS) + 2
-
-    def write(self, name: str, text: str) -> None:
-        """Write one line. Once the stream is gone (``| head`` exited) lines are dropped, so
-        the children's pipes keep draining and nothing blocks."""
-        if self._stream is None:
-            return
-        prefix = f"[{name}]".ljust(self._width)
-        if self._colour:
-            prefix = f"\x1b[{_COLOURS.get(name, '0')}m{prefix}\x1b[0m"
-        try:
-            self._stream.write(f"{prefix} {text}\n")
-            self._stream.flush()
-        except (OSError, ValueError):  # BrokenPipeError; ValueError: the stream was closed
-            self._stream = None
-
-
-class PrefixedLogHandler(logging.Handler):
-    """Sends log records (the supervisor's own) to a :class:`PrefixedOutput` as ``[up]``."""
-
-    def __init__(self, output: PrefixedOutput, name: str = "up") -> None:
-        super().__init__()
-        self._output, self._label = output, name
-
-    def emit(self, record: logging.LogRecord) -> None:
-        try:
-            self._output.write(self._label, self.format(record))
-        except Exception:  # logging must never raise into the caller
-            self.handleError(record)
-
-
-# --------------------------------------------------------------------------- one child
-
-
-def _parent_death_signal() -> Callable[[], None] | None:
-    """A ``preexec_fn`` asking Linux to SIGTERM the child when its parent dies, or None where
-    ``prctl`` is unavailable. libc is resolved here, before fork, so the child only calls it."""
-    if not sys.platform.startswith("linux"):
-        return None
-    try:
-        prctl = ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6", use_errno=True).prctl
-    except (OSError, AttributeError):
-        return None
-    pr_set_pdeathsig = 1
-    parent_pid = os.getpid()
-
-    def preexec() -> None:
-        prctl(pr_set_pdeathsig, int(signal.SIGTERM), 0, 0, 0)
-        if os.getppid() != parent_pid:  # the parent died before prctl took effect
-            os.kill(os.getpid(), signal.SIGTERM)
-
-    return preexec
-
-
-@dataclass
-class Child:
-    """A running component: its process, its log pump and (bridge) the announced port."""
-
-    component: Component
-    process: asyncio.subprocess.Process
-    output: PrefixedOutput
-    port: asyncio.Future[int] = field(
-        default_factory=lambda: asyncio.get_running_loop().create_future()
-    )
-    started_s: float = field(default_factory=time.monotonic)
-    # Serving (the bridge answers /version; a client's topics have publishers): from then on
-    # the child handles SIGINT itself, so dying of it is a failure, not a stop while starting.
-    ready: bool = False
-    _pump: asyncio.Task[None] | None = None
-
-    @classmethod
-    async def start(
-        cls, component: Component, bridge_url: str, env: Mapping[str, str], output: PrefixedOutput
-    ) -> Child:
-        process = await asyncio.create_subprocess_exec(
-            *component.argv(bridge_url),
-            stdin=asyncio.subprocess.DEVNULL,
-            stdout=asyncio.subprocess.PIPE,
-            stderr=asyncio.subprocess.STDOUT,
-            env=dict(env),
-            process_group=0,
-            preexec_fn=_parent_death_signal(),
-            limit=_LINE_LIMIT,
-        )
-        child = cls(component, process, output)
-        child._pump = asyncio.create_task(child._pump_lines(), name=f"{component.name} log")
-        log.info("started %s (pid %d)", component.title, process.pid)
-        return child
-
-    @property
-    def pid(self) -> int:
-        return self.process.pid
-
-    async def _pump_lines(self) -> None:
-        stream = self.process.stdout
-        assert stream is not None
-        while True:
-            try:
-                line = await stream.readline()
-            except ValueError:  # asyncio discards a line over _LINE_LIMIT; say so
-                line = b"[a log line longer than %d bytes was dropped]" % _LINE_LIMIT
-            if not line:
-                break
-            if not self.port.done() and (match := _LISTENING.search(line)):
-                self.port.set_result(int(match.group("port")))
-            self.output.write(self.component.name, line.decode("utf-8", "replace").rstrip())
-
-    async def wait(self) -> int:
-        """Wait for the exit and for the last log line to be written; the exit code.
-
-        What the child left in its process group (navigation's LIDAR worker pool, after a
-        kill -9) is killed at once: it holds the output pipe, and its memory, for seconds
-        after the child is gone. ``Process.wait()`` (Python 3.11) waits for that pipe too, so
-        the exit is taken from ``returncode``, which is set the moment the child is reaped.
-        """
-        while self.process.returncode is None:
-            await asyncio.sleep(_EXIT_POLL_S)
-        code = self.process.returncode
-        with contextlib.suppress(ProcessLookupError, PermissionError):
-            os.killpg(self.pid, signal.SIGKILL)
-        await self.process.wait()
-        if self._pump is not None:
-            await asyncio.shield(self._pump)  # a cancelled waiter must not stop the pump
-        return code
-
-    def signal_group(self, sig: signal.Signals) -> None:
-        """Send ``sig`` to the child's process group (the child and anything it started)."""
-        if self.process.returncode is None:
-            with contextlib.suppress(ProcessLookupError):
-                os.killpg(self.pid, sig)
-
-    async def stop(self, timeout_s: float) -> int:
-        """SIGINT, then SIGTERM, then SIGKILL, ``timeout_s`` apart; the exit code."""
-        for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGKILL):
-            self.signal_group(sig)
-            try:
-                return await asyncio.wait_for(asyncio.shield(self.wait()), timeout_s)
-            except TimeoutError:
-                log.warning(
-                    "%s did not exit within %.0f s of %s", self.component.title, timeout_s, sig.name
-                )
-        return await self.wait()
 
 
 # --------------------------------------------------------------------------- the stack

@@ -9,19 +9,18 @@ from pathlib import Path
 
 import pytest
 
+from clients.stack.child import BRIDGE_URL, describe_exit
 from clients.stack.healthcheck import version_url
 from clients.stack.launcher import (
-    BRIDGE_URL,
     NAVIGATION_TOPICS,
     SIMULATOR_TOPICS,
     LaunchConfig,
-    PrefixedOutput,
     child_environment,
     connect_host,
-    describe_exit,
     stack_components,
     ws_url,
 )
+from clients.stack.output import PrefixedOutput
 
 
 def test_stack_is_bridge_then_simulator_then_navigation_with_their_options() -> None:
