@@ -30,31 +30,20 @@ import numpy as np
 import websockets
 
 from schemas import codec_cbor, codec_json
+from schemas.pointcloud import pack_points
+from schemas.runtime.process import MALLOC_ENV as TUNED_MALLOC
 
-TUNED_MALLOC = {
-    "MALLOC_MMAP_THRESHOLD_": "268435456",
-    "MALLOC_TRIM_THRESHOLD_": "1073741824",
-    "MALLOC_TOP_PAD_": "67108864",
-}
 CLOUD_POINTS = 262_144  # x, y, z, intensity float32 -> 4,194,304 B of data
 
 
-def cloud_message(stamp_ns: int, data: bytes) -> dict:
-    fields = [
-        {"name": n, "offset": 4 * i, "datatype": 7, "count": 1}
-        for i, n in enumerate(["x", "y", "z", "intensity"])
-    ]
-    return {
-        "header": {"stamp": stamp(stamp_ns), "frame_id": "lidar"},
-        "height": 1,
-        "width": CLOUD_POINTS,
-        "fields": fields,
-        "is_bigendian": False,
-        "point_step": 16,
-        "row_step": 16 * CLOUD_POINTS,
-        "data": data,
-        "is_dense": True,
-    }
+def cloud_message(stamp_ns: int, cloud: dict) -> dict:
+    """`cloud` (`schemas.pointcloud.pack_points`, packed once) stamped `stamp_ns`."""
+    return {**cloud, "header": {"stamp": stamp(stamp_ns), "frame_id": "lidar"}}
+
+
+def random_cloud(seed: int) -> dict:
+    points = np.random.default_rng(seed).random((CLOUD_POINTS, 4), dtype=np.float32)
+    return pack_points(points, 0, "lidar")
 
 
 def stamp(ns: int) -> dict:
@@ -124,13 +113,13 @@ async def cloud_latency(url: str, binary: bool, subscribers: int, count: int) ->
         for _ in range(subscribers)
     ]
     pub = await websockets.connect(url, max_size=None, compression=None)
-    data = np.random.default_rng(0).random(CLOUD_POINTS * 4, dtype=np.float32).tobytes()
+    cloud = random_cloud(0)
     latencies = []
     for _ in range(count + 2):
         sent_ns = time.time_ns()
         await pub.send(
             encode(
-                {"op": "publish", "topic": "/lidar", "msg": cloud_message(sent_ns, data)}, binary
+                {"op": "publish", "topic": "/lidar", "msg": cloud_message(sent_ns, cloud)}, binary
             )
         )
         for ws in subs:
@@ -149,7 +138,7 @@ async def imu_under_load(url: str, seconds: float) -> list[float]:
     imu_sub = await subscribe(url, "/imu", "sensor_msgs/msg/Imu", "none")
     pub = await websockets.connect(url, max_size=None, compression=None)
     imu_pub = await websockets.connect(url, compression=None)
-    data = np.random.default_rng(1).random(CLOUD_POINTS * 4, dtype=np.float32).tobytes()
+    cloud = random_cloud(1)
     latencies: list[float] = []
     end = time.monotonic() + seconds
 
@@ -160,7 +149,7 @@ async def imu_under_load(url: str, seconds: float) -> list[float]:
                     {
                         "op": "publish",
                         "topic": "/lidar",
-                        "msg": cloud_message(time.time_ns(), data),
+                        "msg": cloud_message(time.time_ns(), cloud),
                     },
                     True,
                 )

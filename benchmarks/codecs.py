@@ -24,15 +24,11 @@ from schemas.codec_png import decode_png_data, encode_png_op
 from schemas.message import normalize
 from schemas.pointcloud import pack_points
 from schemas.registry import TypeRegistry
+from schemas.runtime.process import MALLOC_ENV as TUNED_MALLOC
 from schemas.safety import frame_problem
 
 LIDAR_POINTS = 345_600  # thesis LIDAR: 1440 azimuth x 240 elevation rays
 POINT_STEP_BYTES = 16  # x, y, z, intensity as float32
-TUNED_MALLOC = {
-    "MALLOC_MMAP_THRESHOLD_": "268435456",
-    "MALLOC_TRIM_THRESHOLD_": "1073741824",
-    "MALLOC_TOP_PAD_": "67108864",
-}
 
 
 def pointcloud(num_points: int) -> dict:

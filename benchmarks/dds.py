@@ -43,16 +43,13 @@ from child_process import Running, repo_env  # noqa: E402
 from dds_netns import Host, LinkShape, shape_link, two_hosts, why_not  # noqa: E402
 
 from schemas import codec_cbor  # noqa: E402
+from schemas.pointcloud import pack_points  # noqa: E402
+from schemas.runtime.process import MALLOC_ENV as TUNED_MALLOC  # noqa: E402
 
 SCAN_POINTS = 345_600  # Table 4.3: 1440 x 240 rays at 0.25 degrees
 POINT_STEP = 16  # x, y, z, intensity float32
 SCAN_HZ, IMU_HZ = 2.0, 50.0
 WARMUP_S = 4.0  # discovery and first-message set-up are not what is measured
-TUNED_MALLOC = {
-    "MALLOC_MMAP_THRESHOLD_": "268435456",
-    "MALLOC_TRIM_THRESHOLD_": "1073741824",
-    "MALLOC_TOP_PAD_": "67108864",
-}
 LISTENING = r"listening on ws://127\.0\.0\.1:(?P<port>\d+)"
 CASES = ("one-bridge", "dds-lo", "dds-veth", "dds-wlan")
 # FL WLAN 1101 (thesis Table 3.1) is IEEE 802.11n, 300 Mbit/s gross: about half of that as
@@ -68,22 +65,9 @@ def stamp(ns: int) -> dict:
     return {"sec": ns // 1_000_000_000, "nanosec": ns % 1_000_000_000}
 
 
-def scan_message(data: bytes, now_ns: int) -> dict:
-    fields = [
-        {"name": n, "offset": 4 * i, "datatype": 7, "count": 1}
-        for i, n in enumerate(["x", "y", "z", "intensity"])
-    ]
-    return {
-        "header": {"stamp": stamp(now_ns), "frame_id": "lidar"},
-        "height": 1,
-        "width": SCAN_POINTS,
-        "fields": fields,
-        "is_bigendian": False,
-        "point_step": POINT_STEP,
-        "row_step": POINT_STEP * SCAN_POINTS,
-        "data": data,
-        "is_dense": True,
-    }
+def scan_message(cloud: dict, now_ns: int) -> dict:
+    """`cloud` (`schemas.pointcloud.pack_points`, packed once) stamped `now_ns`."""
+    return {**cloud, "header": {"stamp": stamp(now_ns), "frame_id": "lidar"}}
 
 
 def imu_message(now_ns: int) -> dict:
@@ -96,7 +80,8 @@ def imu_message(now_ns: int) -> dict:
 async def publish(url: str, seconds: float) -> dict:
     """Scans at SCAN_HZ and IMU at IMU_HZ for `seconds`, each stamped just before encoding."""
     sent = {"scan": 0, "imu": 0}
-    data = np.random.default_rng(0).random(SCAN_POINTS * 4, dtype=np.float32).tobytes()
+    points = np.random.default_rng(0).random((SCAN_POINTS, 4), dtype=np.float32)
+    cloud = pack_points(points, 0, "lidar")  # x, y, z, intensity float32
     async with websockets.connect(url, max_size=None, compression=None) as ws:
         for topic, type_name in (
             ("/lidar/points", "sensor_msgs/msg/PointCloud2"),
@@ -115,7 +100,7 @@ async def publish(url: str, seconds: float) -> dict:
                 await asyncio.sleep(max(0.0, next_at - time.monotonic()))
 
         await asyncio.gather(
-            stream("/lidar/points", SCAN_HZ, lambda t: scan_message(data, t), "scan"),
+            stream("/lidar/points", SCAN_HZ, lambda t: scan_message(cloud, t), "scan"),
             stream("/imu/data", IMU_HZ, imu_message, "imu"),
         )
     return {"sent": sent}

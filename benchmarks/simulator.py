@@ -46,6 +46,7 @@ from sim_processes import header_stamp_s, running_bridge  # noqa: E402
 from clients import RosbridgeClient  # noqa: E402
 from schemas.catalogue import TOPICS as CATALOGUE  # noqa: E402
 from schemas.catalogue import published_by  # noqa: E402
+from schemas.runtime.process import MALLOC_ENV as TUNED_MALLOC  # noqa: E402
 from schemas.runtime.process import single_threaded_blas  # noqa: E402
 from simulator.camera import Camera  # noqa: E402
 from simulator.config import SimConfig  # noqa: E402
@@ -68,11 +69,6 @@ QUIET_REFERENCE_MS = 20.2  # performance-measurements.md 2(d): DISTANCE on 2 thr
 # (their own schedule and thread) have generation times and skip counts.
 TOPICS = {t.key: t.pair for t in published_by("simulator", "sensor", "realtime")}
 HEAVY_SENSORS = tuple(t.key for t in published_by("simulator", "sensor"))
-TUNED_MALLOC = {  # performance-measurements.md, page-fault note
-    "MALLOC_MMAP_THRESHOLD_": "268435456",
-    "MALLOC_TRIM_THRESHOLD_": "1073741824",
-    "MALLOC_TOP_PAD_": "67108864",
-}
 
 
 def reference_query(scene: Scene, lidar: Lidar, pool: ThreadPoolExecutor) -> Callable[[], object]:

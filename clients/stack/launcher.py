@@ -50,6 +50,7 @@ from clients.stack.output import PrefixedOutput
 from clients.stack.restarts import RestartBackoff, RestartLedger, RestartMode, RestartPolicy
 from schemas.catalogue import streams_of
 from schemas.rosauth import read_secret
+from schemas.runtime.process import MALLOC_ENV
 
 log = logging.getLogger(__name__)
 T = TypeVar("T")
@@ -57,14 +58,6 @@ T = TypeVar("T")
 # Ready when these have publishers: what each always streams (schemas.catalogue).
 SIMULATOR_TOPICS = streams_of("simulator")
 NAVIGATION_TOPICS = streams_of("navigation")
-
-# glibc malloc tuning for 4 MB sensor buffers: fresh mmap'd buffers cost ~3 ms of page faults
-# per scan (performance-measurements.md, page-fault note); these keep them on the heap.
-MALLOC_ENV: Mapping[str, str] = {
-    "MALLOC_MMAP_THRESHOLD_": "268435456",
-    "MALLOC_TRIM_THRESHOLD_": "1073741824",
-    "MALLOC_TOP_PAD_": "67108864",
-}
 
 _POLL_S = 0.25  # readiness probe period: cheap (one rosapi round trip per topic)
 _WILDCARD_TO_LOOPBACK = {"0.0.0.0": "127.0.0.1", "": "127.0.0.1", "::": "::1"}

@@ -11,8 +11,17 @@ import gc
 import os
 import sys
 import threading
+from collections.abc import Mapping
 
 from threadpoolctl import threadpool_limits
+
+# glibc malloc tuning for 4 MB sensor buffers: fresh mmap'd buffers cost ~3 ms of page faults
+# per scan (performance-measurements.md, page-fault note); these keep them on the heap.
+MALLOC_ENV: Mapping[str, str] = {
+    "MALLOC_MMAP_THRESHOLD_": "268435456",
+    "MALLOC_TRIM_THRESHOLD_": "1073741824",
+    "MALLOC_TOP_PAD_": "67108864",
+}
 
 # Heavy work (ray casts, clustering, big encodes) runs on threads that only get a core when no
 # normal thread wants one (SCHED_IDLE): on 2 cores a scan's work occupies both, and an IMU sample
