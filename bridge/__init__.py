@@ -1,6 +1,6 @@
 """riverbridge's rosbridge v2 websocket server (the Node.js role in the thesis' pipeline).
 
-Entry points: `bridge.server.run_bridge(BridgeConfig)` for programs and tests,
+Entry points: `bridge.compose.run_bridge(BridgeConfig)` for programs and tests,
 `python -m bridge` (`bridge.cli.main`) for people; `bridge.core.BridgeCore` is the
 transport-free protocol core. See `bridge/README.md` for the module map.
 """

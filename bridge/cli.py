@@ -14,10 +14,10 @@ from pathlib import Path
 from pydantic import SecretStr, ValidationError
 
 from bridge.access import scheme, tls_context
+from bridge.compose import run_bridge
 from bridge.config import AUTH_SECRET_ENV, MIB, MIN_SEND_BUFFER, BridgeConfig
 from bridge.dds.options import add_dds_options, dds_config_fields, print_config
 from bridge.errors import DdsStartError
-from bridge.server import run_bridge
 from schemas.rosauth import read_secret
 from schemas.runtime.process import freeze_startup_heap, tune_process
 

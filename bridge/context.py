@@ -61,11 +61,16 @@ class BridgeState:
         self.pending_goals: dict[str, PendingGoal] = {}
         self.params: dict[str, str] = {}
         self.sinks: list[MessageSink] = [LocalFanout()]
-        # Nodes another middleware knows (a DDS domain's ROS 2 nodes), for rosapi's listings.
-        self.external_nodes: set[str] = set()
+        # Nodes of other graphs by source (a DDS domain's ROS 2 nodes), for rosapi's listings.
+        self.external_graphs: dict[str, frozenset[str]] = {}
         # Services the bridge answers itself, name -> RosapiService (set by the core).
         self.rosapi: dict[str, RosapiService] = {}
         self.clients_ever = 0
+
+    @property
+    def external_nodes(self) -> frozenset[str]:
+        """The nodes of every other graph (`BridgeCore.set_external_nodes`)."""
+        return frozenset().union(*self.external_graphs.values())
 
     def session_of_node(self, node: str) -> ClientSession | None:
         return next((s for s in self.sessions.values() if s.node == node), None)

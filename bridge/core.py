@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import contextlib
 import logging
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 
 from bridge.config import BridgeConfig
 from bridge.context import BridgeState, Context, log_problem_summary
@@ -20,6 +20,7 @@ from bridge.names import absolute_name
 from bridge.ops import OpRoute, actions, auth, fragments, levels, merge_routes, services, topics
 from bridge.outgoing import MIN_FRAGMENT_SIZE, TopicMessage, payload_size
 from bridge.rosapi import ROSAPI_SERVICES
+from bridge.rosapi.common import RosapiService
 from bridge.session import ClientSession
 from bridge.sinks import MessageSink
 from bridge.validation import PublishCheck
@@ -251,6 +252,37 @@ class BridgeCore:
     def add_sink(self, sink: MessageSink) -> None:
         """Receive every message published in the graph from now on (e.g. a DDS mirror)."""
         self.state.sinks.append(sink)
+
+    def remove_sink(self, sink: MessageSink) -> None:
+        with contextlib.suppress(ValueError):
+            self.state.sinks.remove(sink)
+
+    def answer_service(self, name: str, service: RosapiService) -> None:
+        """Answer calls to `name` in the bridge itself, as rosapi's (the stats service)."""
+        self.state.rosapi[name] = service
+
+    def stop_answering(self, name: str) -> None:
+        self.state.rosapi.pop(name, None)
+
+    def set_external_nodes(self, source: str, nodes: Iterable[str]) -> None:
+        """The nodes another graph (`source`: a DDS domain...) has, listed by rosapi."""
+        self.state.external_graphs[source] = frozenset(nodes)
+
+    def add_remote_publisher(self, topic: str, type_name: str, node: str, advert: OpId) -> None:
+        """A node of another graph publishes `topic` (GraphConflictError: another type)."""
+        self.state.graph.declare_type(topic, type_name)
+        self.state.graph.add_publisher(topic, node, advert, latch=False)
+
+    def remove_remote_publisher(self, topic: str, node: str) -> None:
+        self.state.graph.remove_publisher(topic, node)
+
+    def add_remote_subscriber(self, topic: str, type_name: str, node: str) -> None:
+        """A node of another graph subscribes to `topic` (GraphConflictError: another type)."""
+        self.state.graph.declare_type(topic, type_name)
+        self.state.graph.add_subscriber(topic, node)
+
+    def remove_remote_subscriber(self, topic: str, node: str) -> None:
+        self.state.graph.remove_subscriber(topic, node)
 
     def publish_external(
         self,

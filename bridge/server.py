@@ -12,29 +12,24 @@ publisher), and while its own client leaves too many answers unread.
 from __future__ import annotations
 
 import asyncio
-import contextlib
 import logging
 import time
-from collections.abc import AsyncIterator, Callable
+from collections.abc import Callable, Mapping
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass
-from typing import Any
 
 from websockets.asyncio.server import Server, ServerConnection, serve
 from websockets.exceptions import ConnectionClosed
 from websockets.http11 import Request, Response
 
-from bridge.access import HandshakePolicy, scheme, tls_context
+from bridge.access import HandshakePolicy, tls_context
 from bridge.config import BridgeConfig
 from bridge.core import BridgeCore
 from bridge.effects import Close, DeadlineKey, Effect, Schedule, Send
 from bridge.http import HttpRoutes
 from bridge.intake import Intake
-from bridge.link import WRITE_HIGH_WATER, ClientLink
+from bridge.link import WRITE_HIGH_WATER, ClientLink, Delivered
+from bridge.outgoing import Delivery
 from bridge.reply_budget import POLICY_VIOLATION
-from bridge.stats import BridgeTelemetry
-from bridge.webapp import default_web_root, mount_webapp
-from schemas.registry import TypeRegistry
 
 logger = logging.getLogger("bridge.server")
 
@@ -54,8 +49,16 @@ INTAKE_BYTES = 32 * 1024 * 1024
 TRY_AGAIN_LATER = 1013  # RFC 6455: a handshake that raced past --max-clients
 
 
+def no_observer(client_id: int, delivery: Delivery, wire_bytes: int, written_ns: int) -> None:
+    """The default `BridgeServer.delivered`: nobody counts deliveries."""
+
+
 class BridgeServer:
-    """Owns the websocket server and feeds `core`; start with `start()`, end with `stop()`."""
+    """Owns the websocket server and feeds `core`; start with `start()`, end with `stop()`.
+
+    Plug-ins never see it: `bridge.compose` wraps it in a `PluginHost` (`bridge.host.Edge` is
+    what the host uses of it: `http`, `internal_clients`, `delivered`, `clients_changed`).
+    """
 
     def __init__(self, config: BridgeConfig, core: BridgeCore) -> None:
         self.config = config
@@ -67,11 +70,10 @@ class BridgeServer:
         self._closing: set[asyncio.Task[None]] = set()
         self.http = HttpRoutes()  # plain HTTP on the websocket port; others add routes
         self.access = HandshakePolicy(config)  # Origin and client-limit checks (bridge.access)
-        mount_webapp(self.http, config.web_root or default_web_root())
-        self.telemetry = BridgeTelemetry(self)  # spans, stats service, /metrics
-        self._telemetry_task: asyncio.Task[None] | None = None
         # In-process clients (a DDS mirror's stand-ins): client id -> who takes their sends.
         self.internal_clients: dict[int, Callable[[Send], None]] = {}
+        self.delivered: Delivered = no_observer  # told when a delivery's frames are written
+        self.clients_changed: list[Callable[[], None]] = []  # after a client comes or goes
 
     @property
     def port(self) -> int:
@@ -91,14 +93,9 @@ class BridgeServer:
             process_request=self._process_request,
             ssl=tls_context(self.config),
         )
-        self._telemetry_task = asyncio.create_task(
-            self.telemetry.run(self.apply), name="bridge-telemetry"
-        )
 
     async def stop(self) -> None:
         """Close every connection (1001), stop timers and workers."""
-        if self._telemetry_task is not None:
-            self._telemetry_task.cancel()
         if self._server is not None:
             self._server.close()
             try:
@@ -143,7 +140,7 @@ class BridgeServer:
             pool=self._pool,
             offload_bytes=self.config.offload_threshold_bytes,
             reply_budget_bytes=self.config.reply_budget_bytes,
-            delivered=self.telemetry.tracer.delivered,
+            delivered=self.delivered,
             over_budget=lambda reason: self._close_over_budget(client_id, reason),
             node=self.core.state.sessions[client_id].node,
         )
@@ -153,7 +150,7 @@ class BridgeServer:
             self.apply(effects, paced)
 
         intake = Intake(client_id, self.core, self._pool, apply)
-        self.apply(self.telemetry.clients_changed())
+        self._tell_clients_changed()
         try:
             busy_s = 0.0  # time spent handling this client's frames since it last yielded
             async for data in ws:
@@ -176,7 +173,11 @@ class BridgeServer:
             del self.links[client_id]
             link.close()
             self.apply(self.core.disconnect(client_id, time.time_ns()))
-            self.apply(self.telemetry.clients_changed())
+            self._tell_clients_changed()
+
+    def _tell_clients_changed(self) -> None:
+        for callback in self.clients_changed:
+            callback()
 
     def _close_over_budget(self, client_id: int, reason: str) -> None:
         """A client left more answers unread than its reply budget (`bridge.reply_budget`)."""
@@ -226,6 +227,11 @@ class BridgeServer:
         self._timers.pop(key, None)
         self.apply(self.core.on_deadline(key, time.time_ns()))
 
+    def send_queue_drops(self, client_id: int) -> Mapping[str, int]:
+        """Messages per topic the client's send queue dropped (empty if it is gone)."""
+        link = self.links.get(client_id)
+        return link.queue.dropped if link is not None else {}
+
     def stats(self) -> dict[int, dict[str, object]]:
         """Per connected client: frames sent, messages dropped per topic, items waiting and
         bytes not yet taken by the client."""
@@ -250,49 +256,4 @@ async def close_link(link: ClientLink, code: int, reason: str) -> None:
         link.ws.transport.abort()
 
 
-@dataclass(frozen=True)
-class RunningBridge:
-    """A started bridge: where it listens, and its parts for tests and tools."""
-
-    host: str
-    port: int
-    server: BridgeServer
-    dds: Any = None  # the DDS mirror (bridge.dds.mirror.DdsMirror) when config.dds
-
-    @property
-    def url(self) -> str:
-        return f"{scheme(self.server.config)}://{self.host}:{self.port}"
-
-    @property
-    def core(self) -> BridgeCore:
-        return self.server.core
-
-
-@contextlib.asynccontextmanager
-async def run_bridge(
-    config: BridgeConfig, registry: TypeRegistry | None = None
-) -> AsyncIterator[RunningBridge]:
-    """Start a bridge for the duration of the `async with` block.
-
-    `registry` defaults to the standard types plus `config.interface_dirs`.
-    """
-    if registry is None:
-        registry = TypeRegistry.with_defaults(config.interface_dirs)
-    server = BridgeServer(config, BridgeCore(config, registry))
-    await server.start()
-    mirror = None
-    try:
-        if config.dds:  # imported only when asked: Cyclone DDS loads a C library
-            from bridge.dds.mirror import DdsMirror
-
-            joining = DdsMirror(server)
-            await joining.start()
-            mirror = joining
-        yield RunningBridge(config.host, server.port, server, mirror)
-    finally:
-        if mirror is not None:
-            await mirror.stop()
-        await server.stop()
-
-
-__all__ = ["BridgeServer", "RunningBridge", "run_bridge"]
+__all__ = ["BridgeServer", "close_link", "no_observer"]

@@ -1,26 +1,25 @@
 """The bridge's telemetry: its trace spans and ProcessStats as topics, the stats service,
 ``/client_count`` and ``GET /metrics`` (docs/tracing.md).
 
-`BridgeTelemetry` attaches to a `BridgeServer`: it registers a `BridgeTracer` as a sink of the
-core's graph, answers ``/riverbridge/stats`` itself (like rosapi), adds the ``/metrics`` route,
-and once a second publishes its spans and stats into its own graph as an internal source
-(`BridgeCore.publish_external`), so any client reads them like any other topic.
+`BridgeTelemetry` is a plug-in (`bridge.host`): through its `PluginHost` it registers a
+`BridgeTracer` as a sink of the graph and as the observer of deliveries, answers
+``/riverbridge/stats`` itself (like rosapi), adds the ``/metrics`` route, and once a second
+publishes its spans and stats into the graph as an internal source (`publish_external`), so
+any client reads them like any other topic.
 """
 
 from __future__ import annotations
 
 import logging
-import time
-from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
 from websockets.asyncio.server import ServerConnection
 from websockets.http11 import Request, Response
 
 from bridge.graph import BRIDGE_NODE
+from bridge.host import PluginHost
 from bridge.http import respond
 from bridge.metrics import CONTENT_TYPE, MetricsSnapshot, render_metrics
-from bridge.rosapi.common import RosapiService
 from bridge.tracing import BridgeTracer
 from schemas.runtime.telemetry import ResourceSampler, telemetry_ticks, this_process
 from schemas.supervision import RESTARTS_TOPIC, restart_counts
@@ -39,8 +38,6 @@ from schemas.tracing import (
 
 if TYPE_CHECKING:
     from bridge.context import Context
-    from bridge.effects import Effect
-    from bridge.server import BridgeServer
 
 log = logging.getLogger(__name__)
 
@@ -50,33 +47,46 @@ PROCESS_NAME = "bridge"
 
 
 class BridgeTelemetry:
-    """Tracing, counters and their publication for one running `BridgeServer`."""
+    """Tracing, counters and their publication for one running bridge."""
 
-    def __init__(self, server: BridgeServer) -> None:
-        self._server = server
-        self._core = server.core
-        self.tracer = BridgeTracer(self._core.state)
-        self._core.add_sink(self.tracer)
-        self._core.state.rosapi[STATS_SERVICE] = RosapiService(
-            STATS_SERVICE_TYPE, self._answer_stats
-        )
-        server.http.add("/metrics", self.metrics_page)
+    def __init__(
+        self,
+        host: PluginHost,
+        period_s: float = PUBLISH_PERIOD_S,
+        trace_period_s: float = TRACE_PERIOD_S,
+    ) -> None:
+        self._host = host
+        self._periods_s = (period_s, trace_period_s)
+        self.tracer = BridgeTracer(host.clients())
         self._sampler = ResourceSampler()
         self._identity = this_process(PROCESS_NAME)
         self.cpu_percent = 0.0
-        self._started_ns = time.time_ns()
+        self._started_ns = host.now_ns()
         self._client_count: int | None = None
+
+    async def start(self) -> None:
+        host = self._host
+        host.add_sink(self.tracer)
+        host.observe_deliveries(self.tracer.delivered)
+        host.answer_service(STATS_SERVICE, STATS_SERVICE_TYPE, self._answer_stats)
+        host.http.add("/metrics", self.metrics_page)
+        host.on_clients_changed(self.clients_changed)
+        self.clients_changed()
+        host.spawn(self._publish_forever(*self._periods_s), name="bridge-telemetry")
+
+    async def stop(self) -> None:
+        """Nothing to undo: the host cancels the publishing, the bridge closes after it."""
 
     # -- what is counted ---------------------------------------------------------------------
 
     def drops(self) -> dict[tuple[str, str], int]:
         """Messages dropped per (topic, subscriber): subscription queue plus send queue."""
         drops: dict[tuple[str, str], int] = {}
-        for client_id, session in self._core.state.sessions.items():
-            link = self._server.links.get(client_id)
+        for client_id, session in self._host.clients().items():
+            queue_drops = self._host.send_queue_drops(client_id)
             name = self.tracer.subscriber_name(client_id)
             for topic, subscription in session.subscriptions.items():
-                count = subscription.dropped + (link.queue.dropped.get(topic, 0) if link else 0)
+                count = subscription.dropped + queue_drops.get(topic, 0)
                 if count:
                     drops[(topic, name)] = count
         return drops
@@ -85,7 +95,7 @@ class BridgeTelemetry:
         return MetricsSnapshot(
             dict(self.tracer.topics),
             self.drops(),
-            len(self._core.state.sessions),
+            len(self._host.clients()),
             self.cpu_percent,
             self._sampler.rss_bytes(),
             self.tracer.spans.discarded,
@@ -94,7 +104,7 @@ class BridgeTelemetry:
 
     def restarts(self) -> dict[str, int]:
         """Component restarts from the latched report of `riverbridge up`, if one runs."""
-        entry = self._core.state.graph.topics.get(RESTARTS_TOPIC)
+        entry = self._host.graph.topics.get(RESTARTS_TOPIC)
         if entry is None or entry.latched is None:
             return {}
         return restart_counts(entry.latched.msg)
@@ -128,49 +138,38 @@ class BridgeTelemetry:
 
     # -- what is published -------------------------------------------------------------------
 
-    def _listened(self, topic: str) -> bool:
-        """Someone subscribes to `topic`: the bridge adds its own topics to the graph only
-        then, so a bridge nobody observes shows just `/rosout` and pays nothing."""
-        return bool(self._core.state.topic_subscriptions.get(topic))
+    # The bridge adds its own topics to the graph only while someone subscribes to them, so a
+    # bridge nobody observes shows just `/rosout` and pays nothing.
 
-    def clients_changed(self) -> list[Effect]:
+    def clients_changed(self) -> None:
         """Publish the latched `/client_count` if the number changed (or was never sent)."""
-        if not self._listened(CLIENT_COUNT_TOPIC):
+        if not self._host.subscribed(CLIENT_COUNT_TOPIC):
             self._client_count = None
-            return []
-        count = len(self._core.state.sessions)
+            return
+        count = len(self._host.clients())
         if count == self._client_count:
-            return []
+            return
         self._client_count = count
-        return self._core.publish_external(
-            BRIDGE_NODE,
-            CLIENT_COUNT_TOPIC,
-            CLIENT_COUNT_TYPE,
-            {"data": count},
-            time.time_ns(),
-            latch=True,
+        self._host.publish_external(
+            BRIDGE_NODE, CLIENT_COUNT_TOPIC, CLIENT_COUNT_TYPE, {"data": count}, latch=True
         )
 
-    def publish_spans(self) -> list[Effect]:
+    def publish_spans(self) -> None:
         """The spans recorded since the last call, for whoever subscribes (drained either way)."""
         spans = self.tracer.spans.drain()
-        if not spans or not self._listened(TRACE_TOPIC):
-            return []
-        return self._core.publish_external(
-            BRIDGE_NODE,
-            TRACE_TOPIC,
-            TRACE_TYPE,
-            span_array_msg(self._identity, spans),
-            time.time_ns(),
-        )
+        if spans and self._host.subscribed(TRACE_TOPIC):
+            self._host.publish_external(
+                BRIDGE_NODE, TRACE_TOPIC, TRACE_TYPE, span_array_msg(self._identity, spans)
+            )
 
-    def publish_once(self) -> list[Effect]:
+    def publish_once(self) -> None:
         """`publish_spans`, and the bridge's ProcessStats for whoever subscribes to them."""
-        now_ns = time.time_ns()
+        now_ns = self._host.now_ns()
         self.cpu_percent = self._sampler.cpu_percent()
-        effects = self.clients_changed() + self.publish_spans()
-        if not self._listened(STATS_TOPIC):
-            return effects
+        self.clients_changed()
+        self.publish_spans()
+        if not self._host.subscribed(STATS_TOPIC):
+            return
         traffic = self.tracer.topics.values()
         counters = {
             "messages_in": sum(t.messages_in for t in traffic),
@@ -179,28 +178,22 @@ class BridgeTelemetry:
             "bytes_out": sum(t.wire_bytes_out for t in traffic),
             "dropped": sum(self.drops().values()),
         }
-        effects += self._core.publish_external(
+        self._host.publish_external(
             BRIDGE_NODE,
             STATS_TOPIC,
             STATS_TYPE,
             process_stats_msg(
                 self._identity, now_ns, self.cpu_percent, self._sampler.rss_bytes(), counters
             ),
-            now_ns,
         )
-        return effects
 
-    async def run(
-        self,
-        apply: Callable[[list[Effect]], None],
-        period_s: float = PUBLISH_PERIOD_S,
-        trace_period_s: float = TRACE_PERIOD_S,
-    ) -> None:
-        """Publish spans every `trace_period_s` and stats every `period_s` until cancelled;
-        `apply` carries out the effects."""
-        apply(self.clients_changed())
+    async def _publish_forever(self, period_s: float, trace_period_s: float) -> None:
+        """Publish spans every `trace_period_s` and stats every `period_s` until cancelled."""
         async for with_stats in telemetry_ticks(period_s, trace_period_s):
             try:
-                apply(self.publish_once() if with_stats else self.publish_spans())
+                if with_stats:
+                    self.publish_once()
+                else:
+                    self.publish_spans()
             except Exception:  # telemetry must never take the bridge down
                 log.exception("publishing the bridge's telemetry failed")

@@ -10,6 +10,7 @@ tuples (docs/tracing.md).
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -25,7 +26,8 @@ from schemas.tracing import (
 )
 
 if TYPE_CHECKING:
-    from bridge.context import BridgeState, Context
+    from bridge.context import Context
+    from bridge.session import ClientSession
 
 
 @dataclass(slots=True)
@@ -44,8 +46,10 @@ class BridgeTracer:
     """Spans and per-topic traffic of the bridge; `names` maps client nodes to the process
     names they announce in their ProcessStats (so fanout spans name the subscriber)."""
 
-    def __init__(self, state: BridgeState, capacity: int = SPAN_CAPACITY) -> None:
-        self._state = state
+    def __init__(
+        self, sessions: Mapping[int, ClientSession], capacity: int = SPAN_CAPACITY
+    ) -> None:
+        self._sessions = sessions  # the core's, read only
         self.spans = SpanBuffer(capacity)
         self.topics: dict[str, TopicTraffic] = {}
         self.names: dict[str, str] = {}
@@ -93,7 +97,7 @@ class BridgeTracer:
 
     def subscriber_name(self, client_id: int) -> str:
         """The process name a client announced, else its node name."""
-        session = self._state.sessions.get(client_id)
+        session = self._sessions.get(client_id)
         node = session.node if session is not None else f"/rosbridge_client_{client_id}"
         return self.names.get(node, node)
 

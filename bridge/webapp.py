@@ -18,6 +18,7 @@ from urllib.parse import unquote
 from websockets.asyncio.server import ServerConnection
 from websockets.http11 import Request, Response
 
+from bridge.host import PluginHost
 from bridge.http import HttpRoutes, respond
 
 logger = logging.getLogger("bridge.webapp")
@@ -121,4 +122,19 @@ def mount_webapp(routes: HttpRoutes, root: Path) -> StaticSite:
     return site
 
 
-__all__ = ["BUILD_COMMAND", "StaticSite", "default_web_root", "mount_webapp"]
+class Dashboard:
+    """The plug-in: serves `config.web_root` (else `default_web_root()`) on the bridge's port."""
+
+    def __init__(self, host: PluginHost) -> None:
+        self._host = host
+        self.site: StaticSite | None = None
+
+    async def start(self) -> None:
+        root = self._host.config.web_root or default_web_root()
+        self.site = mount_webapp(self._host.http, root)
+
+    async def stop(self) -> None:
+        """Nothing to undo: the routes end with the server."""
+
+
+__all__ = ["BUILD_COMMAND", "Dashboard", "StaticSite", "default_web_root", "mount_webapp"]

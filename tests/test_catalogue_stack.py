@@ -8,8 +8,8 @@ from typing import Any
 
 import pytest
 
+from bridge.compose import run_bridge
 from bridge.config import BridgeConfig
-from bridge.server import run_bridge
 from clients import RosbridgeClient
 from navigation.config import LidarConfig as NavLidarConfig
 from navigation.config import NavigationConfig

@@ -8,3 +8,17 @@ the bridge's graph), `outbox` (the bounded write queue). Cyclone's shell: `parti
 `service_mirror`, `announce`; `mirror.DdsMirror` ties them to the bridge. Only `--dds` imports
 the shell (Cyclone loads a C library).
 """
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from bridge.host import Plugin, PluginHost
+
+
+def plugin(host: PluginHost) -> Plugin:
+    """The DDS mirror as a plug-in of `host` (`bridge.compose`); Cyclone loads only now."""
+    from bridge.dds.mirror import DdsMirror
+
+    return DdsMirror(host)

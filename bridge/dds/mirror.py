@@ -1,10 +1,11 @@
 """`DdsMirror`: the bridge as one ROS 2 node of a DDS domain (`--dds`, docs/ros2.md).
 
-The mirror lives on the event loop and changes the core only the ways a client could:
-`publish_external` for samples from the domain, in-process clients for services, plain
-graph entries for remote publishers and subscribers. Cyclone's side runs on two threads of
-its own: the pump (takes and decodes samples, reads discovery) and the writer (encodes and
-writes); both reach the loop only through `call_soon_threadsafe`.
+The mirror is a plug-in (`bridge.host`): it lives on the event loop and changes the graph
+only through its `PluginHost`'s core calls: `publish_external` for samples from the domain,
+in-process clients for services, remote endpoints for remote publishers and subscribers.
+Cyclone's side runs on two threads of its own: the pump (takes and decodes samples, reads
+discovery) and the writer (encodes and writes); both reach the loop only through
+`call_soon_threadsafe`.
 
 What goes where:
 - a message a websocket client publishes goes to DDS once, on the topic's one writer;
@@ -23,7 +24,6 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import logging
-import time
 from collections.abc import Callable
 from typing import TYPE_CHECKING
 
@@ -43,27 +43,27 @@ from bridge.dds.qos import QosProfile, advertised_profile, reader_profile, stron
 from bridge.dds.service_mirror import ServiceMirror
 from bridge.dds.topic_mirror import Arrival, TopicMirror, Wanted
 from bridge.errors import BridgeError, DdsStartError
+from bridge.host import PluginHost
 from schemas.errors import SchemaError
 
 if TYPE_CHECKING:
     from bridge.context import Context
     from bridge.graph import TopicEntry
     from bridge.outgoing import TopicMessage
-    from bridge.server import BridgeServer
 
 logger = logging.getLogger("bridge.dds")
 
 RECONCILE_S = 0.1  # how late a new advertisement or subscription reaches DDS at most
+EXTERNAL_SOURCE = "dds"  # the name of the domain's nodes in rosapi's view of other graphs
 
 
 class DdsMirror:
-    """Joins `server`'s graph to DDS domain `config.dds_domain`; `start()`, then `stop()`."""
+    """Joins the host's graph to DDS domain `config.dds_domain`; `start()`, then `stop()`."""
 
-    def __init__(self, server: BridgeServer) -> None:
-        self.server = server
-        self.core = server.core
-        self.config = server.config
-        self.registry = self.core.state.registry
+    def __init__(self, host: PluginHost) -> None:
+        self.host = host
+        self.config = host.config
+        self.registry = host.registry
         self.view = DomainView()
         self.graph_sync = GraphSync()
         self._injecting = False
@@ -91,7 +91,7 @@ class DdsMirror:
         except Exception as exc:  # e.g. a type Cyclone refuses: leave the domain again
             self.participant.close()
             raise DdsStartError(f"cannot set up the DDS mirror: {exc!r}") from exc
-        self.core.add_sink(self)
+        self.host.add_sink(self)
         self.writer.start()
         self.pump.start()
         self._task = asyncio.create_task(self._reconcile_forever(), name="bridge-dds")
@@ -120,15 +120,7 @@ class DdsMirror:
             lambda arrivals: to_loop(self._inject, arrivals),
         )
         self.services = ServiceMirror(
-            self.core,
-            self.server.apply,
-            self.server.internal_clients,
-            self.participant,
-            self.pump,
-            self.outbox,
-            self.registry,
-            self.node,
-            to_loop,
+            self.host, self.participant, self.pump, self.outbox, self.node, to_loop
         )
         self.announcer = Announcer(
             self.participant,
@@ -146,15 +138,14 @@ class DdsMirror:
             self._task.cancel()
             with contextlib.suppress(asyncio.CancelledError):
                 await self._task
-        with contextlib.suppress(ValueError):
-            self.core.state.sinks.remove(self)
+        self.host.remove_sink(self)
         self.pump.stop()
         self.writer.stop()
         self.services.close()
         self.topics.close()
         self.announcer.close()
-        self.graph_sync.clear(self.core.state.graph)
-        self.core.state.external_nodes.clear()
+        self.graph_sync.clear(self.host)
+        self.host.set_external_nodes(EXTERNAL_SOURCE, ())
         self.participant.close()
 
     # -- the sink: local messages out --------------------------------------------------------
@@ -170,7 +161,7 @@ class DdsMirror:
     def local_nodes(self) -> set[str]:
         """Nodes of the websocket clients (not the mirror's own in-process clients)."""
         own = self.services.client_ids
-        return {s.node for s in self.core.state.sessions.values() if s.client_id not in own}
+        return {s.node for s in self.host.clients().values() if s.client_id not in own}
 
     # -- the domain's messages in ------------------------------------------------------------
 
@@ -184,14 +175,8 @@ class DdsMirror:
             latch = reader is not None and reader.wanted.profile.transient_local
             self._injecting = True
             try:
-                effects = self.core.publish_external(
-                    node,
-                    arrival.topic,
-                    arrival.type_name,
-                    arrival.msg,
-                    time.time_ns(),
-                    arrival.cdr,
-                    latch=latch,
+                self.host.publish_external(
+                    node, arrival.topic, arrival.type_name, arrival.msg, arrival.cdr, latch=latch
                 )
             except (BridgeError, SchemaError) as exc:
                 logger.warning("DDS: sample on %s not published: %s", arrival.topic, exc)
@@ -199,7 +184,6 @@ class DdsMirror:
             finally:
                 self._injecting = False
             self.graph_sync.noted_publisher(arrival.topic, node)
-            self.server.apply(effects)
 
     # -- discovery ---------------------------------------------------------------------------
 
@@ -234,7 +218,7 @@ class DdsMirror:
 
     def reconcile(self) -> None:
         """Bring writers, readers, services and the graph's remote half in step."""
-        state = self.core.state
+        graph = self.host.graph
         local = self.local_nodes()
         remote_topics = self.view.topics()
         writers, readers = self._wanted_topics(local, remote_topics)
@@ -242,11 +226,11 @@ class DdsMirror:
         for message in self._waiting_first.values():
             self.topics.send(message)
         self._waiting_first.clear()
-        self.graph_sync.apply(state.graph, remote_topics, local)
-        state.external_nodes = self.view.announced_nodes()
+        self.graph_sync.apply(self.host, remote_topics, local)
+        self.host.set_external_nodes(EXTERNAL_SOURCE, self.view.announced_nodes())
         provided = {
             name: entry.type_name
-            for name, entry in state.graph.services.items()
+            for name, entry in graph.services.items()
             if entry.provider in local and entry.type_name
         }
         self.services.sync(provided, self.view.services())
@@ -261,7 +245,7 @@ class DdsMirror:
     ) -> tuple[dict[str, Wanted], dict[str, Wanted]]:
         writers: dict[str, Wanted] = {}
         readers: dict[str, Wanted] = {}
-        for entry in self.core.state.graph.topics.values():
+        for entry in self.host.graph.topics.values():
             if entry.type_name is None:
                 continue
             publishing = [node for node in entry.publishers if node in local]

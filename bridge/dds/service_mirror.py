@@ -17,25 +17,22 @@ to the mirror instead of a socket):
 from __future__ import annotations
 
 import logging
-import time
 from collections.abc import Callable
 from typing import TypeVar
 
-from bridge.core import BridgeCore
 from bridge.dds.discovery import RemoteService
 from bridge.dds.outbox import Outbox
 from bridge.dds.participant import DdsParticipant, Pump
 from bridge.dds.request_header import RequestId
 from bridge.dds.service_endpoints import Received, ServiceClient, ServiceServer
-from bridge.effects import Effect, Send
+from bridge.effects import Send
+from bridge.host import PluginHost
 from bridge.outgoing import ControlMessage
 from schemas.errors import SchemaError
-from schemas.registry import TypeRegistry
 from schemas.values import JsonObject, JsonValue, Message
 
 logger = logging.getLogger("bridge.dds")
 
-Apply = Callable[[list[Effect]], None]
 ToLoop = Callable[..., object]  # loop.call_soon_threadsafe
 EndpointT = TypeVar("EndpointT", ServiceServer, ServiceClient)
 
@@ -45,21 +42,17 @@ class ServiceMirror:
 
     def __init__(
         self,
-        core: BridgeCore,
-        apply: Apply,
-        internal: dict[int, Callable[[Send], None]],
+        host: PluginHost,
         participant: DdsParticipant,
         pump: Pump,
         outbox: Outbox,
-        registry: TypeRegistry,
         node: str,
         to_loop: ToLoop,
     ) -> None:
-        self._core, self._apply, self._internal = core, apply, internal
+        self._host = host
         self._participant, self._pump, self._outbox = participant, pump, outbox
-        self._registry, self._to_loop = registry, to_loop
-        self.caller = core.connect("dds", node)
-        internal[self.caller] = self._caller_receives
+        self._registry, self._to_loop = host.registry, to_loop
+        self.caller = host.connect_internal(node, self._caller_receives, peer="dds")
         self.client_ids = {self.caller}
         self.servers: dict[str, ServiceServer] = {}
         self.clients: dict[str, ServiceClient] = {}
@@ -117,7 +110,7 @@ class ServiceMirror:
         """Advertise a remote server's service through a stand-in named like its node."""
         if any(
             s.node == service.node
-            for s in self._core.state.sessions.values()
+            for s in self._host.clients().values()
             if s.client_id not in self.client_ids
         ):
             return False  # a websocket client has that node name; never impersonate it
@@ -126,10 +119,11 @@ class ServiceMirror:
             return False
         stand_in = self.stand_ins.get(service.node)
         if stand_in is None:
-            stand_in = self._core.connect("dds", service.node)
+            stand_in = self._host.connect_internal(
+                service.node, self._stand_in_receives, peer="dds"
+            )
             self.stand_ins[service.node] = stand_in
             self.client_ids.add(stand_in)
-            self._internal[stand_in] = self._stand_in_receives
         self.clients[service.name] = client
         self._remote[service.name] = service
         self._send(
@@ -152,12 +146,11 @@ class ServiceMirror:
         if not any(s.node == service.node for s in self._remote.values()):
             del self.stand_ins[service.node]
             self.client_ids.discard(stand_in)
-            self._apply(self._core.disconnect(stand_in, time.time_ns()))
-            self._internal.pop(stand_in, None)
+            self._host.disconnect_internal(stand_in)
         return True
 
     def _send(self, client_id: int, op: JsonObject) -> None:
-        self._apply(self._core.receive_op(client_id, op, time.time_ns()))
+        self._host.send_op(client_id, op)
 
     def guids(self) -> tuple[list[bytes], list[bytes]]:
         """(reader GUIDs, writer GUIDs) of every service endpoint."""
@@ -166,8 +159,7 @@ class ServiceMirror:
 
     def close(self) -> None:
         self.sync({}, {})
-        self._internal.pop(self.caller, None)
-        self._apply(self._core.disconnect(self.caller, time.time_ns()))
+        self._host.disconnect_internal(self.caller)
 
     # -- DDS clients calling local providers ------------------------------------------------
 
@@ -221,7 +213,7 @@ class ServiceMirror:
         if waiting is None:
             return
         stand_in, request_id, spelling = waiting
-        if stand_in in self._internal:
+        if stand_in in self.client_ids:
             self._send(
                 stand_in,
                 {

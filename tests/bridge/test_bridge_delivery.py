@@ -12,9 +12,9 @@ from collections.abc import AsyncIterator
 import pytest
 import websockets
 
+from bridge.compose import RunningBridge, run_bridge
 from bridge.config import BridgeConfig
 from bridge.problems import LINES_PER_WINDOW
-from bridge.server import RunningBridge, run_bridge
 from schemas import codec_cbor
 
 pytestmark = pytest.mark.timeout(90)

@@ -23,8 +23,8 @@ from child_process import running
 from hostile_frames import HostileFrames
 from websockets.exceptions import ConnectionClosed
 
+from bridge.compose import run_bridge
 from bridge.config import BridgeConfig
-from bridge.server import run_bridge
 
 pytestmark = [pytest.mark.timeout(120), pytest.mark.slow]
 

@@ -19,9 +19,9 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from websockets.sync.client import connect
 
+from bridge.compose import run_bridge
 from bridge.config import BridgeConfig
 from bridge.outgoing import render
-from bridge.server import run_bridge
 from schemas import codec_cbor
 
 VALID_OPS = [

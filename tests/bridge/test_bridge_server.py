@@ -15,8 +15,8 @@ import pytest
 import websockets
 from websockets.exceptions import ConnectionClosed
 
+from bridge.compose import RunningBridge, run_bridge
 from bridge.config import BridgeConfig
-from bridge.server import RunningBridge, run_bridge
 from schemas import codec_cbor
 from schemas.pointcloud import pack_points
 

@@ -8,8 +8,8 @@ from urllib.parse import urlsplit
 import pytest
 from client_messages import publish_until_received
 
+from bridge.compose import run_bridge
 from bridge.config import BridgeConfig
-from bridge.server import run_bridge
 from clients import ClientClosed, RosbridgeClient
 
 ADD = "example_interfaces/srv/AddTwoInts"

@@ -111,8 +111,8 @@ async def test_unadvertised_service_no_longer_answers(bridge, make_client):
 
 
 async def test_connection_drop_fails_pending_call_promptly(make_client):
+    from bridge.compose import run_bridge
     from bridge.config import BridgeConfig
-    from bridge.server import run_bridge
 
     async def never(args: dict) -> dict:
         await asyncio.sleep(60)

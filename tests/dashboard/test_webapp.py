@@ -11,8 +11,8 @@ import pytest
 from websockets.asyncio.client import connect
 
 from bridge.cli import build_parser, config_from_args
+from bridge.compose import RunningBridge, run_bridge
 from bridge.config import BridgeConfig
-from bridge.server import RunningBridge, run_bridge
 from bridge.webapp import BUILD_COMMAND, WEB_ROOT_ENV, default_web_root
 
 INDEX_HTML = b"<!doctype html><title>dashboard</title><script src='./assets/index-3f9a.js'>"

@@ -11,8 +11,8 @@ from collections import Counter
 import pytest
 import websockets
 
+from bridge.compose import run_bridge
 from bridge.config import BridgeConfig
-from bridge.server import run_bridge
 from clients import RosbridgeClient
 from clients.errors import ServiceError
 from schemas import codec_cbor

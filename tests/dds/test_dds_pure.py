@@ -7,6 +7,8 @@ import xml.etree.ElementTree as ET
 
 import pytest
 
+from bridge.config import BridgeConfig
+from bridge.core import BridgeCore
 from bridge.dds import naming, request_header
 from bridge.dds.cyclone_xml import CycloneSettings, cyclone_xml
 from bridge.dds.discovery import DomainView, Endpoint, NodeEntities, Snapshot, participant_node
@@ -24,7 +26,6 @@ from bridge.dds.qos import (
     writer_profile,
 )
 from bridge.dds.request_header import RequestId
-from bridge.graph import Graph
 from schemas.codec_cdr import from_cdr, to_cdr
 
 P1, P2 = bytes(range(12)) + b"\x00\x00\x01\xc1", bytes(range(1, 13)) + b"\x00\x00\x01\xc1"
@@ -171,8 +172,9 @@ def test_domain_view_names_endpoints_after_ros_discovery_info_nodes():
     assert view.node_info == {} and view.services() == {}
 
 
-def test_graph_sync_adds_and_removes_remote_endpoints_but_never_local_ones():
-    graph, sync, view = Graph(), GraphSync(), DomainView()
+def test_graph_sync_adds_and_removes_remote_endpoints_but_never_local_ones(registry):
+    core = BridgeCore(BridgeConfig(), registry)  # GraphSync changes the graph by core calls
+    graph, sync, view = core.state.graph, GraphSync(), DomainView()
     graph.add_publisher("/chatter", "/rosbridge_client_1", None, latch=False)
     graph.declare_type("/chatter", "std_msgs/msg/String")
     view.update_snapshot(
@@ -188,13 +190,13 @@ def test_graph_sync_adds_and_removes_remote_endpoints_but_never_local_ones():
     view.update_nodes(P1, (NodeEntities("/remote"),))
     graph.declare_type("/clash", "std_msgs/msg/String")
     graph.add_subscriber("/clash", "/rosbridge_client_1")
-    sync.apply(graph, view.topics(), {"/rosbridge_client_1"})
+    sync.apply(core, view.topics(), {"/rosbridge_client_1"})
     assert set(graph.topics["/chatter"].publishers) == {"/rosbridge_client_1", "/remote"}
     assert graph.topics["/odom"].subscribers == {"/remote"}
     assert graph.topics["/odom"].type_name == "nav_msgs/msg/Odometry"
     assert "/remote" not in graph.topics["/clash"].publishers  # type conflict: not listed
     view.update_snapshot(Snapshot())
-    sync.apply(graph, view.topics(), {"/rosbridge_client_1"})
+    sync.apply(core, view.topics(), {"/rosbridge_client_1"})
     assert set(graph.topics["/chatter"].publishers) == {"/rosbridge_client_1"}
     assert "/odom" not in graph.topics
 

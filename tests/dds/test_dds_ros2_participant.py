@@ -16,9 +16,9 @@ from pathlib import Path
 
 import pytest
 
+from bridge.compose import run_bridge
 from bridge.config import BridgeConfig
 from bridge.dds.cyclone_xml import CycloneSettings, cyclone_xml
-from bridge.server import run_bridge
 from clients import RosbridgeClient
 from simulator.config import CameraConfig, LidarConfig, SceneConfig, SimConfig
 from simulator.node import serve

@@ -33,8 +33,8 @@ WAIT_S = 30.0
 
 @pytest.fixture
 async def bridge_url() -> AsyncIterator[str]:
+    from bridge.compose import run_bridge
     from bridge.config import BridgeConfig
-    from bridge.server import run_bridge
 
     async with run_bridge(BridgeConfig(host="127.0.0.1", port=0)) as running:
         yield running.url

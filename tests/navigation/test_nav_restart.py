@@ -21,8 +21,8 @@ import numpy as np
 import pytest
 from nav_scenes import default_scene, lidar_directions, radar_noise_image, raycast
 
+from bridge.compose import run_bridge
 from bridge.config import BridgeConfig
-from bridge.server import run_bridge
 from clients import RosbridgeClient
 from navigation.messages import header_msg, stamp_ns_of
 from navigation.node import IMU_INPUT, SENSOR_INPUTS

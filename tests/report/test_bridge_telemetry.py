@@ -12,8 +12,8 @@ from typing import Any
 import pytest
 from prometheus_client.parser import text_string_to_metric_families
 
+from bridge.compose import run_bridge
 from bridge.config import BridgeConfig
-from bridge.server import run_bridge
 from clients import RosbridgeClient
 from clients.report.journeys import spans_of_batch
 from clients.stack.node_links import node_links

@@ -8,8 +8,8 @@ import contextlib
 import numpy as np
 import pytest
 
+from bridge.compose import run_bridge
 from bridge.config import BridgeConfig
-from bridge.server import run_bridge
 from clients import RosbridgeClient
 from schemas.catalogue import TOPICS as CATALOGUE
 from schemas.catalogue import published_by

@@ -12,8 +12,8 @@ import time
 
 import pytest
 
+from bridge.compose import run_bridge
 from bridge.config import BridgeConfig
-from bridge.server import run_bridge
 from clients import RosbridgeClient
 from schemas.catalogue import TOPICS, Role, Topic, by_name
 from simulator.config import (

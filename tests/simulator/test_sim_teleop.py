@@ -16,8 +16,8 @@ import time
 import pytest
 from sim_processes import REPO_ROOT, running, running_bridge, simulator_argv
 
+from bridge.compose import run_bridge
 from bridge.config import BridgeConfig
-from bridge.server import run_bridge
 from clients import RosbridgeClient
 from schemas.catalogue import TOPICS
 from simulator.config import VesselConfig

@@ -1,0 +1,101 @@
+"""The composition: the one place that builds a bridge and its plug-ins from the configuration.
+
+`compose` makes the sans-I/O core, the asyncio edge around it (`BridgeServer`), the
+`PluginHost` plug-ins meet them through, and the plug-ins the configuration asks for;
+`run_bridge` starts them for the duration of an `async with` block. Adding a graph transport
+(a Zenoh mirror, say) is a package exposing `plugin(host)` and one line in `plugin_table`.
+"""
+
+from __future__ import annotations
+
+import contextlib
+from collections.abc import AsyncIterator, Callable, Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import bridge.dds
+from bridge.access import scheme
+from bridge.config import BridgeConfig
+from bridge.core import BridgeCore
+from bridge.host import Plugin, PluginHost
+from bridge.server import BridgeServer
+from bridge.stats import BridgeTelemetry
+from bridge.webapp import Dashboard
+from schemas.registry import TypeRegistry
+
+PluginFactory = Callable[[PluginHost], Plugin]
+
+
+def plugin_table(config: BridgeConfig) -> list[tuple[str, bool, PluginFactory]]:
+    """(name, wanted, factory) of every plug-in, in start order (stopped in reverse)."""
+    return [
+        ("dashboard", True, Dashboard),
+        ("telemetry", True, BridgeTelemetry),
+        ("dds", config.dds, bridge.dds.plugin),
+    ]
+
+
+@dataclass(frozen=True)
+class ComposedBridge:
+    """A bridge built but not started: its edge, the host and the wanted plug-ins by name."""
+
+    server: BridgeServer
+    plugin_host: PluginHost
+    plugins: Mapping[str, Plugin]
+
+
+def compose(config: BridgeConfig, registry: TypeRegistry | None = None) -> ComposedBridge:
+    """Core, edge, host and plug-ins for `config`; `registry` defaults to the standard types
+    plus `config.interface_dirs`."""
+    if registry is None:
+        registry = TypeRegistry.with_defaults(config.interface_dirs)
+    server = BridgeServer(config, BridgeCore(config, registry))
+    host = PluginHost(server.core, server)
+    plugins = {name: build(host) for name, wanted, build in plugin_table(config) if wanted}
+    return ComposedBridge(server, host, plugins)
+
+
+@dataclass(frozen=True)
+class RunningBridge:
+    """A started bridge: where it listens, and its parts for tests and tools."""
+
+    host: str
+    port: int
+    server: BridgeServer
+    plugins: Mapping[str, Plugin]
+
+    @property
+    def url(self) -> str:
+        return f"{scheme(self.server.config)}://{self.host}:{self.port}"
+
+    @property
+    def core(self) -> BridgeCore:
+        return self.server.core
+
+    @property
+    def dds(self) -> Any:
+        """The DDS mirror (bridge.dds.mirror.DdsMirror) when `config.dds`, else None."""
+        return self.plugins.get("dds")
+
+
+@contextlib.asynccontextmanager
+async def run_bridge(
+    config: BridgeConfig, registry: TypeRegistry | None = None
+) -> AsyncIterator[RunningBridge]:
+    """Start a bridge and its plug-ins for the duration of the `async with` block."""
+    bridge = compose(config, registry)
+    await bridge.server.start()
+    started: list[Plugin] = []
+    try:
+        for plugin in bridge.plugins.values():
+            await plugin.start()
+            started.append(plugin)
+        yield RunningBridge(config.host, bridge.server.port, bridge.server, bridge.plugins)
+    finally:
+        for plugin in reversed(started):
+            await plugin.stop()
+        await bridge.plugin_host.close()
+        await bridge.server.stop()
+
+
+__all__ = ["ComposedBridge", "RunningBridge", "compose", "plugin_table", "run_bridge"]
