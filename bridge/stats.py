@@ -113,7 +113,7 @@ class BridgeTelemetry:
         """`/riverbridge/stats` (riverbridge_msgs/srv/BridgeStats)."""
         topics = sorted(self.tracer.topics.items())
         drops = sorted(self.drops().items())
-        sessions = sorted(ctx.state.sessions.values(), key=lambda s: s.client_id)
+        sessions = sorted(self._host.clients().values(), key=lambda s: s.client_id)
         return {
             "topics": [name for name, _ in topics],
             "messages_in": [t.messages_in for _, t in topics],

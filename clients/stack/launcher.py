@@ -81,35 +81,17 @@ class LaunchConfig(BaseModel):
     stop_timeout_s: float = Field(default=10.0, gt=0)
     # What happens to a component that dies once the stack runs (clients.stack.restarts).
     restart: RestartMode = "on-failure"
-    # The bridge's access options (docs/bridge.md, "Security and hostile input"); with a
-    # secret or a certificate the simulator and navigation authenticate and trust it too.
+    # The bridge's secret and certificate (docs/bridge.md, "Security and hostile input"):
+    # with them the simulator and navigation authenticate and trust it too.
     auth_secret_file: Path | None = None
     certfile: Path | None = None
-    keyfile: Path | None = None
-    allowed_origins: tuple[str, ...] = ()
-    max_clients: int | None = Field(default=None, gt=0)
-    # Extra bridge options (`riverbridge up --dds ...` passes its DDS options through).
+    # The bridge's options as `up` passes them through (up_cli.BRIDGE_OPTIONS), these two
+    # included.
     bridge_args: tuple[str, ...] = ()
 
     @property
     def scheme(self) -> str:
         return "wss" if self.certfile is not None else "ws"
-
-    def bridge_access_args(self) -> list[str]:
-        """The bridge's command-line options for the access settings."""
-        args: list[str] = []
-        for option, path in (
-            ("--auth-secret-file", self.auth_secret_file),
-            ("--certfile", self.certfile),
-            ("--keyfile", self.keyfile),
-        ):
-            if path is not None:
-                args += [option, str(path)]
-        if self.allowed_origins:
-            args += ["--allowed-origins", *self.allowed_origins]
-        if self.max_clients is not None:
-            args += ["--max-clients", str(self.max_clients)]
-        return args
 
 
 def stack_components(config: LaunchConfig) -> tuple[Component, ...]:
@@ -130,7 +112,6 @@ def stack_components(config: LaunchConfig) -> tuple[Component, ...]:
                 config.host,
                 "--port",
                 str(config.port),
-                *config.bridge_access_args(),
                 *config.bridge_args,
             ),
         ),

@@ -22,6 +22,8 @@ from clients.stack.child import Component
 from clients.stack.launcher import LaunchConfig, Supervisor, stack_components
 from clients.stack.output import PrefixedLogHandler, PrefixedOutput
 from clients.stack.restarts import RESTART_MODES
+from schemas.bridge_config import GROUPS, BridgeConfig
+from schemas.options import add_options, passed_through, spelled
 
 log = logging.getLogger("clients.stack.launcher")
 
@@ -57,55 +59,20 @@ def _toml_file(text: str) -> Path:
     return path.resolve()
 
 
-def _existing_file(text: str) -> Path:
-    path = Path(text)
-    if not path.is_file():
-        raise argparse.ArgumentTypeError(f"no such file: {text}")
-    return path.resolve()
-
-
-def _positive_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a whole number: {text!r}") from None
-    if value <= 0:
-        raise argparse.ArgumentTypeError(f"must be positive, got {value}")
-    return value
-
-
-def add_access_arguments(parser: argparse.ArgumentParser) -> None:
-    """The bridge's access options, passed through (docs/bridge.md)."""
-    parser.add_argument(
-        "--auth-secret-file",
-        type=_existing_file,
-        metavar="FILE",
-        help="the bridge requires rosauth's auth op with this secret; the "
-        "simulator and navigation authenticate with it",
-    )
-    parser.add_argument(
-        "--certfile",
-        type=_existing_file,
-        metavar="FILE",
-        help="serve wss:// and https:// with this certificate (it must name "
-        "the host the components connect to, e.g. 127.0.0.1)",
-    )
-    parser.add_argument(
-        "--keyfile", type=_existing_file, metavar="FILE", help="private key of --certfile"
-    )
-    parser.add_argument(
-        "--allowed-origins",
-        nargs="+",
-        default=[],
-        metavar="GLOB",
-        help="browser Origins allowed to connect (others get 403)",
-    )
-    parser.add_argument(
-        "--max-clients",
-        type=_positive_int,
-        metavar="N",
-        help="refuse websocket handshakes while N clients are connected",
-    )
+# The bridge's options `up` passes through, in the order the bridge gets them; each is
+# written once, on its `BridgeConfig` field (schemas.bridge_config).
+BRIDGE_OPTIONS = (
+    "auth_secret",
+    "certfile",
+    "keyfile",
+    "allowed_origins",
+    "max_clients",
+    "dds",
+    "dds_domain",
+    "dds_interface",
+    "dds_peers",
+)
+PASSED = " (passed to the bridge)"
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -114,6 +81,9 @@ def build_parser() -> argparse.ArgumentParser:
         prog="riverbridge up",
         description="Run the bridge, the simulator and the navigation service as three local "
         "processes with merged, prefixed logs, until Ctrl-C/SIGTERM or until one of them dies.",
+        epilog="With --auth-secret-file or --certfile the simulator and navigation authenticate "
+        "with that secret and trust that certificate (it must name the host they connect to, "
+        "e.g. 127.0.0.1).",
     )
     parser.add_argument(
         "--host", default=defaults.host, help="address the bridge listens on (default %(default)s)"
@@ -163,52 +133,15 @@ def build_parser() -> argparse.ArgumentParser:
         help="restart a component that dies: on-failure (non-zero exit or a "
         "signal), always, or never (then up stops; default %(default)s)",
     )
-    add_access_arguments(parser)
-    add_dds_options(parser)
+    groups = {spell.option.group for spell in spelled(BridgeConfig, BRIDGE_OPTIONS)}
+    add_options(
+        parser,
+        BridgeConfig,
+        [title for title in GROUPS if title in groups],
+        names=BRIDGE_OPTIONS,
+        passing=PASSED,
+    )
     return parser
-
-
-def _domain(text: str) -> str:
-    if not text.isdigit() or not 0 <= int(text) <= 232:
-        raise argparse.ArgumentTypeError(f"must be a DDS domain id 0..232, got {text!r}")
-    return text
-
-
-def add_dds_options(parser: argparse.ArgumentParser) -> None:
-    """The bridge's DDS options, passed through to it (docs/ros2.md)."""
-    group = parser.add_argument_group("ROS 2 over DDS (passed to the bridge; docs/ros2.md)")
-    group.add_argument(
-        "--dds", action="store_true", help="the bridge joins a ROS 2 DDS domain with Cyclone DDS"
-    )
-    group.add_argument(
-        "--domain",
-        type=_domain,
-        metavar="N",
-        help="DDS domain id (bridge default: $ROS_DOMAIN_ID or 0)",
-    )
-    group.add_argument(
-        "--dds-interface",
-        metavar="NAME",
-        help="the only network interface DDS may use (bridge default: lo)",
-    )
-    group.add_argument(
-        "--dds-peer",
-        action="append",
-        default=[],
-        metavar="ADDR",
-        help="unicast discovery peer (repeatable)",
-    )
-
-
-def dds_bridge_args(args: argparse.Namespace) -> tuple[str, ...]:
-    extra = ["--dds"] if args.dds else []
-    if args.domain is not None:
-        extra += ["--domain", args.domain]
-    if args.dds_interface is not None:
-        extra += ["--dds-interface", args.dds_interface]
-    for peer in args.dds_peer:
-        extra += ["--dds-peer", peer]
-    return tuple(extra)
 
 
 def config_from_args(args: argparse.Namespace) -> LaunchConfig:
@@ -221,12 +154,9 @@ def config_from_args(args: argparse.Namespace) -> LaunchConfig:
         startup_timeout_s=args.startup_timeout,
         stop_timeout_s=args.stop_timeout,
         restart=args.restart,
-        auth_secret_file=args.auth_secret_file,
+        auth_secret_file=args.auth_secret,
         certfile=args.certfile,
-        keyfile=args.keyfile,
-        allowed_origins=tuple(args.allowed_origins),
-        max_clients=args.max_clients,
-        bridge_args=dds_bridge_args(args),
+        bridge_args=passed_through(args, BridgeConfig, BRIDGE_OPTIONS),
     )
 
 

@@ -1,0 +1,307 @@
+"""The bridge's configuration: one frozen model shared by its CLI, edge and core, and by
+``riverbridge up``, which passes bridge options through (it may not import `bridge`).
+
+Each field with a command-line option carries it (`schemas.options.Option`): the option is
+written once, here; `python -m bridge` and `up` derive their arguments from it.
+
+Defaults follow the reference rosbridge server (rosbridge-protocol.md §8) except where the
+design asks for more headroom: the thesis' LIDAR scan (Table 4.3, ~345,000 points at 2 Hz) is
+~7.5 MB as JSON, so the inbound frame limit is raised from rosbridge's 10 MB to 64 MiB.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated, Literal
+
+from pydantic import BaseModel, ConfigDict, Field, SecretStr, model_validator
+
+from schemas.options import MIB, Option
+from schemas.rosauth import read_secret
+
+MIN_SEND_BUFFER = 64 * 1024  # below one socket buffer's worth, healthy readers would drop
+#: Environment variable naming a rosauth secret file: the bridge's default --auth-secret-file,
+#: and what riverbridge's clients authenticate with (clients.connection).
+AUTH_SECRET_ENV = "RIVERBRIDGE_AUTH_SECRET_FILE"
+
+# The option groups of `--help`, in order.
+NETWORK = "network"
+LIMITS = "limits (per client unless said)"
+SECURITY = 'access control (docs/bridge.md, "Security and hostile input")'
+TYPES = "message types"
+DASHBOARD = "web dashboard"
+DDS = "ROS 2 over DDS (docs/ros2.md)"
+GROUPS = (NETWORK, LIMITS, SECURITY, TYPES, DASHBOARD, DDS)
+
+
+def secret_of(path: Path) -> SecretStr:
+    """`--auth-secret-file`: the secret on the file's first line."""
+    return SecretStr(read_secret(path))
+
+
+class BridgeConfig(BaseModel):
+    """Everything the bridge needs to start; immutable once built."""
+
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+    host: Annotated[str, Option("--host", NETWORK, "address to listen on")] = "127.0.0.1"
+    # rosbridge's default port (protocol §8); 0 picks a free port.
+    port: Annotated[
+        int, Option("--port", NETWORK, "TCP port; 0 picks a free one", metavar="PORT")
+    ] = Field(default=9090, ge=0, le=65535)
+    # Inbound frame limit in bytes; larger frames are refused with close code 1009 (protocol
+    # §1.1). 64 MiB holds a full Table 4.3 LIDAR scan in JSON (~7.5 MB) with room to spare.
+    max_message_size: Annotated[
+        int,
+        Option(
+            "--max-message-size",
+            LIMITS,
+            "inbound frame limit in bytes; larger frames close with 1009",
+            metavar="BYTES",
+        ),
+    ] = Field(default=64 * MIB, gt=0)
+    # Seconds before an incomplete inbound fragment list is discarded (protocol §8).
+    fragment_timeout_s: Annotated[
+        float,
+        Option("--fragment-timeout", LIMITS, "seconds to wait for missing fragments", "S"),
+    ] = Field(default=600.0, gt=0)
+    # Default call_service timeout in seconds (rosbridge 2.2+ default_call_service_timeout).
+    call_timeout_s: Annotated[
+        float, Option("--call-timeout", LIMITS, "default call_service timeout in seconds", "S")
+    ] = Field(default=5.0, gt=0)
+    # fnmatch patterns gating topic and service names; empty = allow all (protocol §8).
+    topics_glob: Annotated[
+        tuple[str, ...],
+        Option(
+            "--topics-glob",
+            SECURITY,
+            "allow only topics matching this fnmatch pattern (repeatable)",
+            "PATTERN",
+            many="append",
+        ),
+    ] = ()
+    services_glob: Annotated[
+        tuple[str, ...],
+        Option(
+            "--services-glob",
+            SECURITY,
+            "allow only services matching this fnmatch pattern (repeatable)",
+            "PATTERN",
+            many="append",
+        ),
+    ] = ()
+    # fnmatch patterns gating action names (advertise_action, send_action_goal); empty = the
+    # services' patterns, since ROS 2 actions are services underneath (rosbridge gates none).
+    actions_glob: Annotated[
+        tuple[str, ...],
+        Option(
+            "--actions-glob",
+            SECURITY,
+            "allow only actions matching this fnmatch pattern (repeatable; default: the "
+            "--services-glob patterns)",
+            "PATTERN",
+            many="append",
+        ),
+    ] = ()
+    # Bytes one client may leave untaken (in its socket's buffer and its queue) before each topic
+    # it subscribes to loses its oldest waiting message (docs/bridge.md, "Delivery"). 16 MiB holds
+    # two JSON scans (7.4 MB each, Table 4.3) or ~100,000 small messages: only a client that
+    # stops reading or falls seconds behind ever loses anything.
+    send_buffer_bytes: Annotated[
+        int,
+        Option(
+            "--send-buffer",
+            LIMITS,
+            "bytes a client may leave untaken before each of its topics loses its oldest "
+            "waiting message",
+            "BYTES",
+        ),
+    ] = Field(default=16 * MIB, ge=MIN_SEND_BUFFER)
+    # Frames from this many bytes on are decoded, validated and encoded in the worker pool, off
+    # the loop: a 4 MB JSON+base64 encode is ~10-30 ms (performance-measurements §2(c)), and
+    # validating a 40 kB array of 400 nested messages ~6 ms on a busy core.
+    offload_threshold_bytes: Annotated[
+        int,
+        Option(
+            "--offload-threshold",
+            LIMITS,
+            "payloads at least this large are decoded and encoded in a worker thread, off "
+            "the event loop",
+            "BYTES",
+        ),
+    ] = Field(default=4 * 1024, gt=0)
+    # Extra folders of .msg/.srv/.action definitions registered at start-up.
+    interface_dirs: Annotated[
+        tuple[Path, ...],
+        Option(
+            "--interfaces",
+            TYPES,
+            "extra folder of <pkg>/{msg,srv,action}/ definitions (repeatable)",
+            "DIR",
+            many="append",
+            exists="dir",
+        ),
+    ] = ()
+    # ROS distribution reported by /rosapi/get_ros_version.
+    distro: str = "jazzy"
+    # Built web dashboard served at http://host:port/; None = $RIVERBRIDGE_WEB_ROOT or the
+    # repository's web/dist (bridge.webapp.default_web_root).
+    web_root: Annotated[
+        Path | None,
+        Option(
+            "--web-root",
+            DASHBOARD,
+            "built web dashboard to serve at http://HOST:PORT/ (default: "
+            "$RIVERBRIDGE_WEB_ROOT, else the repository's web/dist)",
+            "DIR",
+        ),
+    ] = None
+    # ROS 2 over DDS (docs/ros2.md): with `dds` the bridge joins DDS domain `dds_domain` with
+    # Cyclone DDS and mirrors topics and services the way ROS 2 puts them on the wire. DDS
+    # traffic stays on `dds_interface` (the loopback unless told otherwise), discovery goes to
+    # the listed unicast `dds_peers` (127.0.0.1 on `lo`), multicast is off unless asked for.
+    # Defaults come from where ROS 2 or a container puts them: `ROS_DOMAIN_ID`, and
+    # `RIVERBRIDGE_DDS*` for docker compose; options win over variables.
+    dds: Annotated[
+        bool,
+        Option(
+            "--dds",
+            DDS,
+            "join a ROS 2 DDS domain with Cyclone DDS and mirror topics and services both ways",
+            env="RIVERBRIDGE_DDS",
+        ),
+    ] = False
+    # 0..232: Cyclone's default port mapping (7400 + 250 * domain) ends at domain 232.
+    dds_domain: Annotated[
+        int, Option("--domain", DDS, "DDS domain id", "N", env="ROS_DOMAIN_ID")
+    ] = Field(default=0, ge=0, le=232)
+    dds_interface: Annotated[
+        str,
+        Option(
+            "--dds-interface",
+            DDS,
+            "the only network interface DDS may use",
+            "NAME",
+            env="RIVERBRIDGE_DDS_INTERFACE",
+        ),
+    ] = Field(default="lo", pattern=r"^[A-Za-z0-9._@-]+$")
+    dds_peers: Annotated[
+        tuple[Annotated[str, Field(pattern=r"^[A-Za-z0-9._:\[\]-]+$")], ...],
+        Option(
+            "--dds-peer",
+            DDS,
+            "unicast discovery peer, repeatable or comma-separated; none: 127.0.0.1 on lo",
+            "ADDR",
+            env="RIVERBRIDGE_DDS_PEERS",
+            many="append",
+            split=",",
+        ),
+    ] = ()
+    dds_multicast: Annotated[
+        Literal["false", "spdp", "true"],
+        Option(
+            "--dds-multicast",
+            DDS,
+            "multicast on that interface: false, spdp (discovery only) or true",
+        ),
+    ] = "false"
+    # The bridge's ROS 2 node on the domain; "" = /riverbridge_<8 hex digits of its GUID>.
+    dds_node: Annotated[
+        str,
+        Option(
+            "--dds-node",
+            DDS,
+            "the bridge's ROS 2 node name on the domain (default /riverbridge_<id>)",
+            "NAME",
+        ),
+    ] = Field(default="", pattern=r"^(/?[A-Za-z_][A-Za-z0-9_]*)*$")
+    # Large-sample tuning of Cyclone (socket buffers, writer history cache; bridge.dds
+    # .cyclone_xml); off only to measure what it buys (benchmarks/dds.py).
+    dds_tuned: Annotated[
+        bool,
+        Option(
+            "--dds-untuned",
+            DDS,
+            "Cyclone's own socket buffers and writer cache limits instead of the bridge's "
+            "large-sample settings (to measure them)",
+            negate=True,
+        ),
+    ] = True
+    # Access control (bridge.access, docs/bridge.md "Security and hostile input").
+    # rosauth secret (first line of --auth-secret-file); None = no authentication, as ROS 2
+    # rosbridge. With it, every op before a valid `auth` op is refused (protocol §1.5).
+    auth_secret: Annotated[
+        SecretStr | None,
+        Option(
+            "--auth-secret-file",
+            SECURITY,
+            "require rosauth's auth op, checked against the secret on the file's first line, "
+            "before any other op",
+            "FILE",
+            env=AUTH_SECRET_ENV,
+            exists="file",
+            read=secret_of,
+        ),
+    ] = None
+    # Seconds an `auth` op's `t` may differ from the bridge's clock (rosauth's default).
+    auth_window_s: float = Field(default=5.0, gt=0)
+    # TLS: serve wss:// (and the HTTP pages over https://) with this chain and key.
+    certfile: Annotated[
+        Path | None,
+        Option(
+            "--certfile",
+            SECURITY,
+            "TLS certificate chain (PEM): serve wss:// and https://",
+            "FILE",
+            exists="file",
+        ),
+    ] = None
+    keyfile: Annotated[
+        Path | None,
+        Option("--keyfile", SECURITY, "TLS private key (PEM) of --certfile", "FILE", exists="file"),
+    ] = None
+    # fnmatch globs of browser Origins allowed to open a websocket; empty = any. Handshakes
+    # without an Origin (not a browser) and from the bridge's own pages are always allowed.
+    allowed_origins: Annotated[
+        tuple[str, ...],
+        Option(
+            "--allowed-origins",
+            SECURITY,
+            "browser Origins allowed to open a websocket (fnmatch, e.g. "
+            "'https://*.example.org'); others get 403; clients without Origin are not affected",
+            "GLOB",
+            many="extend",
+        ),
+    ] = ()
+    # Most clients connected at once; None = no limit. More handshakes get HTTP 503.
+    max_clients: Annotated[
+        int | None,
+        Option(
+            "--max-clients", LIMITS, "refuse handshakes (503) while N clients are connected", "N"
+        ),
+    ] = Field(default=None, gt=0)
+    # Bytes of answers (never dropped) a client may leave unread before it is closed with
+    # 1008 (bridge.reply_budget). Half the inbound frame limit: ~300 full rosapi definition
+    # lists, and one larger request to a provider still passes on its own.
+    reply_budget_bytes: Annotated[
+        int,
+        Option(
+            "--reply-budget",
+            LIMITS,
+            "unread answers (never dropped) a client may leave before it is closed with 1008",
+            "BYTES",
+        ),
+    ] = Field(default=32 * MIB, gt=0)
+
+    @model_validator(mode="after")
+    def _tls_pair(self) -> BridgeConfig:
+        if (self.certfile is None) != (self.keyfile is None):
+            raise ValueError("certfile and keyfile (--certfile, --keyfile) go together")
+        return self
+
+    def action_patterns(self) -> tuple[str, ...]:
+        """The globs actions must match: `actions_glob`, else `services_glob`."""
+        return self.actions_glob or self.services_glob
+
+
+__all__ = ["AUTH_SECRET_ENV", "GROUPS", "MIB", "MIN_SEND_BUFFER", "BridgeConfig"]
