@@ -35,15 +35,7 @@ def respond(
     ctx: Context, caller: int, service: str, call_id: OpId, values: JsonValue, result: bool
 ) -> None:
     """Send the caller its `service_response`, echoing its service string and id."""
-    payload: JsonObject = {
-        "op": "service_response",
-        "service": service,
-        "values": values,
-        "result": result,
-    }
-    if call_id is not None:
-        payload["id"] = call_id
-    ctx.send(caller, payload)
+    ctx.send(caller, ServiceResponse(service=service, values=values, result=result, id=call_id))
 
 
 def fill_message(ctx: Context, spec: MessageSpec, raw: JsonValue) -> Message:
@@ -113,10 +105,7 @@ def call(
     ctx.state.pending_calls[request_id] = PendingCall(
         name, provider.client_id, session.client_id, call_id, op.service, timeout_s
     )
-    ctx.send(
-        provider.client_id,
-        {"op": "call_service", "id": request_id, "service": entry.spelling, "args": args},
-    )
+    ctx.send(provider.client_id, CallService(id=request_id, service=entry.spelling, args=args))
     ctx.schedule(("call", request_id), ctx.now_ns + int(timeout_s * NS_PER_S))
     return None
 
