@@ -14,6 +14,7 @@ from bridge.errors import BridgeError, OpFailure
 from bridge.graph import ServiceEntry
 from bridge.names import absolute_name, allowed
 from bridge.ops import route
+from bridge.rosapi.common import RosapiService
 from bridge.session import ClientSession
 from schemas.errors import SchemaError
 from schemas.message import normalize
@@ -67,6 +68,17 @@ def service_type_name(ctx: Context, raw: str) -> str | None:
     return normalize_type_name(raw, "srv")
 
 
+def answer_rosapi(ctx: Context, service: RosapiService, args: JsonValue) -> Message:
+    """A rosapi service's answer, typed by its `.srv` in the registry both ways: the handler
+    gets the request with exactly the request's fields (defaults filled, types checked) and
+    its values go out as the response type says (field order, defaults; a field the `.srv`
+    lacks fails the call)."""
+    srv = ctx.state.registry.service(service.type_name)
+    return fill_message(
+        ctx, srv.response, service.handler(ctx, fill_message(ctx, srv.request, args))
+    )
+
+
 def handle_call_service(ctx: Context, session: ClientSession, op: CallService) -> None:
     name_part, _, suffix = op.service.partition("#")
     call_id = op.id if op.id is not None else (suffix or None)
@@ -87,7 +99,7 @@ def call(
     """Answer a rosapi call (returns its values) or forward it to a provider (returns None)."""
     rosapi = ctx.state.rosapi.get(name)
     if rosapi is not None:
-        return rosapi.handler(ctx, request_fields(ctx, rosapi.type_name, op.args))
+        return answer_rosapi(ctx, rosapi, op.args)
     if not allowed(name, ctx.state.config.services_glob):
         raise OpFailure(f"Service {name} is not allowed by services_glob")
     entry = ctx.state.graph.services.get(name)
