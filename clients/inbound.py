@@ -8,9 +8,8 @@ rosbridge-clients.md): a missing ``result`` means success (roslibpy and roslibjs
 with ``""`` (the pending call, goal or advertisement names it). Extra keys are kept by the
 models and ignored. Anything else a model refuses is a :class:`ProtocolError` naming the op and
 the field; the reader logs it in one line and drops the frame, never the connection.
-
-``publish`` is read by `schemas.ops.parse_publish` (no pydantic for a well-formed one, ~0.4
-µs): it is the one op that arrives per message.
+``publish``, the one op that arrives per message, is read by `schemas.ops.parse_publish`
+instead (no pydantic for a well-formed one, ~0.4 µs).
 """
 
 from __future__ import annotations
@@ -21,9 +20,8 @@ from functools import partial
 from types import MappingProxyType
 from typing import Generic, Protocol, TypeVar
 
-from clients.errors import ProtocolError
 from clients.events import Event
-from schemas.ops import OpBase, OpError, PublishFields, op_name, parse_publish, validate_op
+from schemas.ops import OpBase, op_name, validate_op
 from schemas.values import JsonObject, JsonValue
 
 ModelT = TypeVar("ModelT", bound=OpBase)
@@ -69,25 +67,15 @@ LENIENCY: Mapping[str, tuple[Callable[[JsonObject], None], ...]] = MappingProxyT
 def read_op(model: type[ModelT], op: Mapping[str, JsonValue]) -> ModelT:
     """`op` (whose ``op`` names `model`) as a `model`, read as leniently as real servers need.
 
-    Raises :class:`ProtocolError` naming the op and the first bad field.
+    Raises `schemas.ops.OpError` naming the op and the first bad field (the protocol turns
+    it into a :class:`ProtocolError`).
     """
     fixes = LENIENCY.get(str(op.get("op")), ())
     if fixes:
         op = dict(op)
         for fix in fixes:
             fix(op)
-    try:
-        return validate_op(model, op)
-    except OpError as exc:
-        raise ProtocolError(str(exc)) from None
-
-
-def read_publish(op: Mapping[str, JsonValue]) -> PublishFields:
-    """A ``publish`` as `schemas.ops.parse_publish` reads it; :class:`ProtocolError` if bad."""
-    try:
-        return parse_publish(op)
-    except OpError as exc:
-        raise ProtocolError(str(exc)) from None
+    return validate_op(model, op)
 
 
 class OpRoute(Protocol[ReceiverT_contra]):

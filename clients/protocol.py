@@ -38,12 +38,13 @@ from clients.events import (
     TopicMessage,
 )
 from clients.fragments import FragmentAssembler
-from clients.inbound import OpRoute, Route, read_publish, route
+from clients.inbound import OpRoute, Route, route
 from clients.wire import Frame, decode_frame, op_frame
 from schemas import ops
 from schemas.errors import SchemaError
 from schemas.frames import publish_cbor, publish_json
 from schemas.message import normalize
+from schemas.ops import OpError
 
 logger = logging.getLogger(__name__)
 
@@ -396,7 +397,10 @@ class ClientProtocol:
         route = _ROUTES.get(op["op"])
         if route is None:
             return [Ignored(op["op"], "no handler for this op")]
-        return route.run(self, op, recv_ns, wire_bytes)
+        try:
+            return route.run(self, op, recv_ns, wire_bytes)
+        except OpError as exc:
+            raise ProtocolError(str(exc)) from None
 
     def _on_publish(self, op: ops.PublishFields, recv_ns: int, wire_bytes: int) -> list[Event]:
         sub_ids = self._topic_index.get(op.topic, ())
@@ -452,7 +456,7 @@ class ClientProtocol:
 #: The ops a server sends a client, each read by its model and handled by one method.
 _ROUTES: Mapping[str, OpRoute[ClientProtocol]] = MappingProxyType(
     {
-        "publish": Route(read_publish, ClientProtocol._on_publish),
+        "publish": Route(ops.parse_publish, ClientProtocol._on_publish),
         **route(ops.ServiceResponse, ClientProtocol._on_service_response),
         **route(ops.CallService, ClientProtocol._on_call_service),
         **route(ops.ActionFeedback, ClientProtocol._on_action_feedback),
