@@ -5,6 +5,8 @@ method that returns the frame (state bookkeeping, model, encoding) and of
 ``codec_json.dumps`` of a plain dict with the same keys (the floor), and their ratio. Then
 ``encode_publish`` of an IMU-sized message and of a 4 MB PointCloud2 (345,600 points) in JSON
 and CBOR next to ``schemas.frames.publish_*`` of the same message (what the bridge uses).
+Then, inbound, ``ClientProtocol.receive`` of each op a server sends (decode, reading into its
+`schemas.ops` model, routing) next to ``codec_json.loads`` of the same frame.
 Run as ``python benchmarks/client_ops.py``; medians hold up on a loaded machine, ratios more so.
 """
 
@@ -209,6 +211,108 @@ def publish_rows(
     return rows
 
 
+def _pending(op: str, make: Callable[[ClientProtocol], str], tail: str) -> Setup:
+    """A setup that opens what `op` answers (a call, a goal) and returns the frame to receive."""
+
+    def setup(p: ClientProtocol) -> str:
+        return f'{{"op":"{op}","id":"{make(p)}",{tail}}}'
+
+    return setup
+
+
+def _fixed(frame: str) -> Setup:
+    return lambda p: frame
+
+
+_IMU_JSON = (
+    '{"op":"publish","topic":"/imu","msg":{"header":{"stamp":{"sec":1700000000,"nanosec":5},'
+    '"frame_id":"imu"},"orientation":{"x":0.0,"y":0.0,"z":0.38,"w":0.92},'
+    '"orientation_covariance":[0.001,0,0,0,0.001,0,0,0,0.001],'
+    '"angular_velocity":{"x":0.01,"y":-0.02,"z":0.1},'
+    '"angular_velocity_covariance":[0.0001,0,0,0,0.0001,0,0,0,0.0001],'
+    '"linear_acceleration":{"x":0.2,"y":0.0,"z":9.81},'
+    '"linear_acceleration_covariance":[0.01,0,0,0,0.01,0,0,0,0.01]}}'
+)
+
+#: (inbound op, setup returning the frame to receive on a prepared protocol).
+INBOUND: list[tuple[str, Setup]] = [
+    ("publish Imu untyped", _fixed(_IMU_JSON.replace('"/imu"', '"/raw"'))),
+    ("publish Imu typed", _fixed(_IMU_JSON)),
+    (
+        "service_response",
+        _pending(
+            "service_response",
+            lambda p: p.call_service("/add", {"a": 1})[0],
+            '"service":"/add","values":{"sum":3},"result":true',
+        ),
+    ),
+    (
+        "call_service",
+        _fixed(
+            '{"op":"call_service","id":"service_request:/add:1","service":"/add",'
+            '"args":{"a":1,"b":2}}'
+        ),
+    ),
+    (
+        "action_feedback",
+        lambda p: (
+            f'{{"op":"action_feedback","id":"{_goal(p)}","action":"/fib",'
+            '"values":{"partial":[0,1,1]}}'
+        ),
+    ),
+    (
+        "action_result",
+        _pending(
+            "action_result",
+            _goal,
+            '"action":"/fib","values":{"sequence":[0,1,1,2]},"status":4,"result":true',
+        ),
+    ),
+    (
+        "send_action_goal",
+        _fixed(
+            '{"op":"send_action_goal","id":"action_goal:/serve:1","action":"/serve",'
+            '"action_type":"example/action/Fibonacci","args":{"order":4},"feedback":true}'
+        ),
+    ),
+    (
+        "cancel_action_goal",
+        _fixed('{"op":"cancel_action_goal","id":"action_goal:/serve:1","action":"/serve"}'),
+    ),
+    ("status", _fixed('{"op":"status","level":"error","msg":"boom","id":"x"}')),
+]
+
+
+def inbound_rows(registry: TypeRegistry, repeats: int) -> list[tuple[str, float, float]]:
+    """(op, µs of ClientProtocol.receive, µs of codec_json.loads of the same frame)."""
+    rows = []
+    for name, setup in INBOUND:
+        proto = ClientProtocol(encoding="json", spec_lookup=registry.message)
+        proto.subscribe("/imu", "sensor_msgs/msg/Imu")
+        proto.subscribe("/raw")
+        proto.advertise_service("/add", "example/srv/AddTwoInts")
+        proto.advertise_action("/serve", "example/action/Fibonacci")
+        state: list[str] = [setup(proto)]
+
+        def prepare(p: ClientProtocol = proto, s: Setup = setup, st: list[str] = state) -> None:
+            st[0] = s(p)
+
+        def receive(p: ClientProtocol = proto, st: list[str] = state) -> object:
+            return p.receive(st[0], recv_ns=0)
+
+        events = receive()
+        assert events and (name == "status" or type(events[0]).__name__ != "Ignored"), events
+        frame = state[0].encode()
+        rows.append(
+            (
+                name,
+                median_us(receive, repeats, prepare),
+                median_us(lambda f=frame: codec_json.loads(f), repeats),
+            )
+        )
+    return rows
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
     parser.add_argument("--repeats", type=int, default=20_000, help="calls per small op")
@@ -227,6 +331,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         registry, args.points, args.repeats, args.big_repeats
     ):
         print(f"{name:36s} {client:10.1f} {shared:10.1f} {client / shared:6.2f} {size:10d}")
+    print(f"{'inbound (receive vs loads)':36s} {'receive µs':>10s} {'loads µs':>10s} {'ratio':>6s}")
+    for name, received, loaded in inbound_rows(registry, args.repeats):
+        print(f"{name:36s} {received:10.2f} {loaded:10.2f} {received / loaded:6.2f}")
     return 0
 
 

@@ -13,9 +13,10 @@ from bridge.outgoing import ControlMessage, Delivery, TopicMessage
 from bridge.session import ClientSession, StatusLevel
 from bridge.sinks import LocalFanout, MessageSink
 from bridge.subscription import Release, Subscription
+from schemas.ops import OpBase, Status, to_wire
 from schemas.registry import TypeRegistry
 from schemas.safety import echo, safe_text
-from schemas.values import JsonObject, OpId
+from schemas.values import OpId
 
 if TYPE_CHECKING:
     from bridge.inbound import InboundFrame
@@ -89,12 +90,16 @@ class Context:
         # Texts of completed fragment lists, fed back to the core as inbound messages.
         self.reassembled: list[str] = []
 
-    def send(self, client_id: int, payload: JsonObject) -> None:
-        """Queue a JSON op for a client; it will never be dropped from the send queue."""
+    def send(self, client_id: int, op: OpBase) -> None:
+        """Queue an op for a client as JSON; it will never be dropped from the send queue.
+
+        `op` is a `schemas.ops` model, the one definition of the op both ways: the bridge
+        answers with the types it reads (`to_wire`: rosbridge's key order, no null id).
+        """
         session = self.state.sessions.get(client_id)
         if session is not None:
             self.effects.append(
-                Send(client_id, ControlMessage(payload), None, session.fragment_size_for())
+                Send(client_id, ControlMessage(to_wire(op)), None, session.fragment_size_for())
             )
 
     def release(self, session: ClientSession, subscription: Subscription, release: Release) -> None:
@@ -161,10 +166,7 @@ class Context:
                 exc_info=exc_info,
             )
         if level >= session.status_level and session.status_level != StatusLevel.NONE:
-            status: JsonObject = {"op": "status", "level": level.name.lower(), "msg": text}
-            if op_id is not None:
-                status["id"] = op_id
-            self.send(session.client_id, status)
+            self.send(session.client_id, Status(level=level.name.lower(), msg=text, id=op_id))
 
 
 def log_problem_summary(ctx: Context, client_id: int) -> None:

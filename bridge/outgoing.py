@@ -18,7 +18,7 @@ import numpy as np
 from schemas import codec_json
 from schemas.codec_cdr import to_cdr
 from schemas.codec_png import encode_png_op
-from schemas.frames import publish_cbor, publish_cbor_raw, publish_json
+from schemas.frames import fragments_json, publish_cbor, publish_cbor_raw, publish_json
 from schemas.registry import TypeRegistry
 
 JSON = "none"
@@ -188,22 +188,7 @@ def render(item: Outgoing, fragment_size: int | None, fallback_id: str) -> list[
     frame = item.frame()
     if fragment_size is None or not frame.text or len(frame.data) <= fragment_size:
         return [frame]
-    text = frame.data.decode("ascii")
     message_id = item.message_id
     fragment_id = fallback_id if message_id is None else message_id
-    total = -(-len(text) // fragment_size)
-    return [
-        WireFrame(
-            codec_json.dumps(
-                {
-                    "op": "fragment",
-                    "id": fragment_id,
-                    "data": text[i * fragment_size : (i + 1) * fragment_size],
-                    "num": i,
-                    "total": total,
-                }
-            ),
-            text=True,
-        )
-        for i in range(total)
-    ]
+    pieces = fragments_json(frame.data.decode("ascii"), fragment_size, fragment_id)
+    return [WireFrame(piece, text=True) for piece in pieces]

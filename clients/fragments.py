@@ -15,11 +15,10 @@ There is no clock here (sans-I/O): instead of rosbridge's 600 s expiry, at most
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
-from typing import Any
 
 from clients.errors import ProtocolError
+from schemas.ops import Fragment
 
 DEFAULT_MAX_PARTIAL = 8
 """Unfinished messages kept at once; a server interleaves few (one per fragmenting op)."""
@@ -48,13 +47,19 @@ class FragmentAssembler:
 
     def __init__(self, max_partial: int = DEFAULT_MAX_PARTIAL) -> None:
         self._max_partial = max_partial
-        self._partials: dict[Any, _Partial] = {}
+        self._partials: dict[str | int, _Partial] = {}
         self.discarded = 0
         """Unfinished messages thrown away (superseded or evicted)."""
 
-    def add(self, op: dict[str, Any], wire_bytes: int) -> Reassembled | None:
-        """Store one fragment op; return the reassembled text when it completes a message."""
-        key, num, total, data = _fields(op)
+    def add(self, fragment: Fragment, wire_bytes: int) -> Reassembled | None:
+        """Store one fragment; return the reassembled text when it completes a message.
+
+        The model has checked the types and floored a float ``total``; a ``num`` outside
+        ``0..total-1`` raises :class:`ProtocolError`.
+        """
+        key, num, total, data = fragment.id, fragment.num, fragment.total, fragment.data
+        if not 0 <= num < total:
+            raise ProtocolError(f"fragment num {num} outside 0..{total - 1}")
         partial = self._partials.get(key)
         if partial is not None and (partial.total != total or num in partial.pieces):
             self.discarded += 1
@@ -69,7 +74,7 @@ class FragmentAssembler:
         text = "".join(partial.pieces[i] for i in range(partial.total))
         return Reassembled(text, partial.wire_bytes)
 
-    def _start(self, key: Any, total: int) -> _Partial:
+    def _start(self, key: str | int, total: int) -> _Partial:
         self._partials.pop(key, None)
         while len(self._partials) >= self._max_partial:
             oldest = next(iter(self._partials))
@@ -83,21 +88,3 @@ class FragmentAssembler:
     def pending(self) -> int:
         """Number of messages with some but not all pieces received."""
         return len(self._partials)
-
-
-def _fields(op: dict[str, Any]) -> tuple[Any, int, int, str]:
-    """Validate a fragment op and return (id, num, total, data) with an integer piece count."""
-    try:
-        key, num, total, data = op["id"], op["num"], op["total"], op["data"]
-    except KeyError as exc:
-        raise ProtocolError(f"fragment without {exc.args[0]!r}") from exc
-    if not isinstance(data, str) or not isinstance(num, int) or isinstance(num, bool):
-        raise ProtocolError("fragment needs an integer num and a string data")
-    if not isinstance(total, int | float) or isinstance(total, bool) or not math.isfinite(total):
-        raise ProtocolError(f"fragment total {total!r} is not a number")
-    count = math.floor(total)
-    if count < 1 or not 0 <= num < count:
-        raise ProtocolError(f"fragment num {num} outside 0..{count - 1}")
-    if isinstance(key, list | dict):
-        raise ProtocolError("fragment id must be a scalar")
-    return key, num, count, data

@@ -38,11 +38,13 @@ from clients.events import (
     TopicMessage,
 )
 from clients.fragments import FragmentAssembler
+from clients.inbound import OpRoute, Route, route
 from clients.wire import Frame, decode_frame, op_frame
 from schemas import ops
 from schemas.errors import SchemaError
 from schemas.frames import publish_cbor, publish_json
 from schemas.message import normalize
+from schemas.ops import OpError
 
 logger = logging.getLogger(__name__)
 
@@ -387,91 +389,91 @@ class ClientProtocol:
         )
 
     def handle(self, op: dict[str, Any], *, recv_ns: int, wire_bytes: int) -> list[Event]:
-        """Route a decoded op to its destination; returns the resulting events."""
-        handler = self._HANDLERS.get(op["op"])
-        if handler is None:
+        """Read a decoded op into its `schemas.ops` model and route it; returns the events.
+
+        Raises :class:`ProtocolError` naming the op and field when the op cannot be read
+        (`clients.inbound` says how leniently); an op no handler takes is `Ignored`.
+        """
+        route = _ROUTES.get(op["op"])
+        if route is None:
             return [Ignored(op["op"], "no handler for this op")]
         try:
-            return handler(self, op, recv_ns, wire_bytes)
-        except (KeyError, TypeError, ValueError) as exc:
-            raise ProtocolError(f"{op['op']} op missing or malformed field: {exc}") from exc
+            return route.run(self, op, recv_ns, wire_bytes)
+        except OpError as exc:
+            raise ProtocolError(str(exc)) from None
 
-    def _on_publish(self, op: dict[str, Any], recv_ns: int, wire_bytes: int) -> list[Event]:
-        topic = op["topic"]
-        sub_ids = self._topic_index.get(topic, ())
+    def _on_publish(self, op: ops.PublishFields, recv_ns: int, wire_bytes: int) -> list[Event]:
+        sub_ids = self._topic_index.get(op.topic, ())
         if not sub_ids:
-            return [Ignored("publish", f"no subscription for {topic}")]
-        msg = op.get("msg")
-        received = Received(topic, msg if isinstance(msg, dict) else {}, recv_ns, wire_bytes)
-        return [TopicMessage(sub_ids, received)]
+            return [Ignored("publish", f"no subscription for {op.topic}")]
+        return [TopicMessage(sub_ids, Received(op.topic, op.msg, recv_ns, wire_bytes))]
 
-    def _on_service_response(self, op: dict[str, Any], _ns: int, _wb: int) -> list[Event]:
-        call_id = op.get("id")
+    def _on_service_response(self, op: ops.ServiceResponse, _ns: int, _wb: int) -> list[Event]:
+        call_id = op.id
         if not isinstance(call_id, str) or call_id not in self._calls:
             return [Ignored("service_response", f"no pending call with id {call_id!r}")]
         service = self._calls.pop(call_id)
-        result = op.get("result", True) is not False
-        return [ServiceReply(call_id, op.get("service", service), result, op.get("values"))]
+        return [ServiceReply(call_id, op.service or service, op.result, op.values)]
 
-    def _on_call_service(self, op: dict[str, Any], _ns: int, _wb: int) -> list[Event]:
-        service = op["service"]
-        if service not in self._services:
-            return [Ignored("call_service", f"service {service} is not advertised here")]
-        return [ServiceRequest(op.get("id"), service, op.get("args") or {})]
+    def _on_call_service(self, op: ops.CallService, _ns: int, _wb: int) -> list[Event]:
+        if op.service not in self._services:
+            return [Ignored("call_service", f"service {op.service} is not advertised here")]
+        return [ServiceRequest(op.id, op.service, op.args or {})]
 
-    def _on_action_feedback(self, op: dict[str, Any], _ns: int, _wb: int) -> list[Event]:
-        goal_id = op.get("id")
+    def _on_action_feedback(self, op: ops.ActionFeedback, _ns: int, _wb: int) -> list[Event]:
+        goal_id = op.id
         if not isinstance(goal_id, str) or goal_id not in self._goals:
             return [Ignored("action_feedback", f"no goal with id {goal_id!r}")]
-        return [ActionFeedback(goal_id, self._goals[goal_id], op.get("values"))]
+        return [ActionFeedback(goal_id, self._goals[goal_id], op.values)]
 
-    def _on_action_result(self, op: dict[str, Any], _ns: int, _wb: int) -> list[Event]:
-        goal_id = op.get("id")
+    def _on_action_result(self, op: ops.ActionResult, _ns: int, _wb: int) -> list[Event]:
+        goal_id = op.id
         if not isinstance(goal_id, str) or goal_id not in self._goals:
             return [Ignored("action_result", f"no goal with id {goal_id!r}")]
         action = self._goals.pop(goal_id)
-        values = op.get("values")
-        status = op.get("status")
-        if status is None and isinstance(values, dict):
-            status = values.get("status", 0)
-        result = op.get("result", True) is not False
-        return [ActionOutcome(goal_id, action, int(status or 0), result, values)]
+        return [ActionOutcome(goal_id, action, op.status, op.result, op.values)]
 
-    def _on_goal_request(self, op: dict[str, Any], _ns: int, _wb: int) -> list[Event]:
-        action = op["action"]
-        if action not in self._actions:
-            return [Ignored("send_action_goal", f"action {action} is not advertised here")]
-        return [GoalRequest(op["id"], action, op.get("action_type"), op.get("args") or {})]
+    def _on_goal_request(self, op: ops.SendActionGoal, _ns: int, _wb: int) -> list[Event]:
+        if op.action not in self._actions:
+            return [Ignored("send_action_goal", f"action {op.action} is not advertised here")]
+        goal_id = _goal_id(op)
+        return [GoalRequest(goal_id, op.action, op.action_type or None, op.args or {})]
 
-    def _on_goal_cancel(self, op: dict[str, Any], _ns: int, _wb: int) -> list[Event]:
-        return [GoalCancel(op["id"], op.get("action", ""))]
+    def _on_goal_cancel(self, op: ops.CancelActionGoal, _ns: int, _wb: int) -> list[Event]:
+        return [GoalCancel(_goal_id(op), op.action)]
 
-    def _on_fragment(self, op: dict[str, Any], recv_ns: int, wire_bytes: int) -> list[Event]:
+    def _on_fragment(self, op: ops.Fragment, recv_ns: int, wire_bytes: int) -> list[Event]:
         whole = self._fragments.add(op, wire_bytes)
         if whole is None:
             return []
         inner = self.decode(whole.text, recv_ns=recv_ns)
         return self.handle(inner, recv_ns=recv_ns, wire_bytes=whole.wire_bytes)
 
-    def _on_status(self, op: dict[str, Any], _ns: int, _wb: int) -> list[Event]:
-        return [Ignored("status", f"{op.get('level')}: {op.get('msg')} (id {op.get('id')})")]
-
-    _HANDLERS: Mapping[str, Callable[[ClientProtocol, dict[str, Any], int, int], list[Event]]]
+    def _on_status(self, op: ops.Status, _ns: int, _wb: int) -> list[Event]:
+        return [Ignored("status", f"{op.level}: {op.msg} (id {op.id})")]
 
 
-ClientProtocol._HANDLERS = MappingProxyType(
+#: The ops a server sends a client, each read by its model and handled by one method.
+_ROUTES: Mapping[str, OpRoute[ClientProtocol]] = MappingProxyType(
     {
-        "publish": ClientProtocol._on_publish,
-        "service_response": ClientProtocol._on_service_response,
-        "call_service": ClientProtocol._on_call_service,
-        "action_feedback": ClientProtocol._on_action_feedback,
-        "action_result": ClientProtocol._on_action_result,
-        "send_action_goal": ClientProtocol._on_goal_request,
-        "cancel_action_goal": ClientProtocol._on_goal_cancel,
-        "fragment": ClientProtocol._on_fragment,
-        "status": ClientProtocol._on_status,
+        "publish": Route(ops.parse_publish, ClientProtocol._on_publish),
+        **route(ops.ServiceResponse, ClientProtocol._on_service_response),
+        **route(ops.CallService, ClientProtocol._on_call_service),
+        **route(ops.ActionFeedback, ClientProtocol._on_action_feedback),
+        **route(ops.ActionResult, ClientProtocol._on_action_result),
+        **route(ops.SendActionGoal, ClientProtocol._on_goal_request),
+        **route(ops.CancelActionGoal, ClientProtocol._on_goal_cancel),
+        **route(ops.Fragment, ClientProtocol._on_fragment),
+        **route(ops.Status, ClientProtocol._on_status),
     }
 )
+
+
+def _goal_id(op: ops.SendActionGoal | ops.CancelActionGoal) -> str:
+    """A goal's id: always a string from rosbridge (``action_goal:<action>:<n>``)."""
+    if not isinstance(op.id, str):
+        raise ProtocolError(f"{op.op} needs a string id, got {op.id!r}")
+    return op.id
 
 
 def _advertise_frame(record: AdvertiseRecord) -> Frame:

@@ -440,13 +440,16 @@ _ABSENT = object()
 
 
 def to_wire(model: OpBase) -> JsonObject:
-    """The op as a dict in rosbridge key order, with only ``op`` and the fields that were set.
+    """The op as a dict in rosbridge key order: ``op``, then the fields that were set.
 
-    ``id`` therefore appears only when the op was built (or parsed) with one.
+    ``id`` therefore appears only when the op was built (or parsed) with one, and never as
+    ``null`` (rosbridge leaves an absent id out). The values are the model's own objects, not
+    copies: a 4 MB message in ``msg`` or ``values`` is passed along, never walked. This is how
+    the bridge writes every op it sends but ``publish`` and ``fragment`` (`schemas.frames`).
     """
     fields_set = model.model_fields_set
     return {
-        name: getattr(model, name)
-        for name in type(model).model_fields
-        if name == "op" or name in fields_set
+        name: value
+        for name, value in model.__dict__.items()
+        if name == "op" or (name in fields_set and (value is not None or name != "id"))
     }

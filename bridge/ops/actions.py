@@ -28,23 +28,19 @@ from schemas.ops import (
 )
 from schemas.specs import MessageSpec
 from schemas.typenames import is_valid_type_name, normalize_type_name
-from schemas.values import JsonObject, JsonValue, OpId
+from schemas.values import JsonValue, OpId
 
 STATUS_ABORTED = 6  # action_msgs/GoalStatus
 
 
 def fail_goal(ctx: Context, caller: int, action: str, caller_id: OpId, reason: str) -> None:
     """End a caller's goal with `result: false`, status ABORTED and the reason as values."""
-    payload: JsonObject = {
-        "op": "action_result",
-        "action": action,
-        "values": reason,
-        "status": STATUS_ABORTED,
-        "result": False,
-    }
-    if caller_id is not None:
-        payload["id"] = caller_id
-    ctx.send(caller, payload)
+    ctx.send(
+        caller,
+        ActionResult(
+            action=action, values=reason, status=STATUS_ABORTED, result=False, id=caller_id
+        ),
+    )
 
 
 def action_spec_part(
@@ -99,14 +95,9 @@ def forward_goal(ctx: Context, session: ClientSession, op: SendActionGoal) -> No
     )
     ctx.send(
         provider.client_id,
-        {
-            "op": "send_action_goal",
-            "id": goal_id,
-            "action": entry.spelling,
-            "action_type": type_name,
-            "args": args,
-            "feedback": True,
-        },
+        SendActionGoal(
+            id=goal_id, action=entry.spelling, action_type=type_name, args=args, feedback=True
+        ),
     )
 
 
@@ -127,14 +118,8 @@ def handle_action_feedback(ctx: Context, session: ClientSession, op: ActionFeedb
     values = filled(
         ctx, action_spec_part(ctx, entry.type_name if entry else None, "feedback"), op.values
     )
-    payload: JsonObject = {
-        "op": "action_feedback",
-        "action": pending.caller_action,
-        "values": values,
-    }
-    if pending.caller_id is not None:
-        payload["id"] = pending.caller_id
-    ctx.send(pending.caller, payload)
+    feedback = ActionFeedback(action=pending.caller_action, values=values, id=pending.caller_id)
+    ctx.send(pending.caller, feedback)
 
 
 def handle_action_result(ctx: Context, session: ClientSession, op: ActionResult) -> None:
@@ -153,16 +138,16 @@ def handle_action_result(ctx: Context, session: ClientSession, op: ActionResult)
         ctx.problem(session, "action_result", op.id, str(exc))
         fail_goal(ctx, pending.caller, pending.caller_action, pending.caller_id, str(exc))
         return
-    payload: JsonObject = {
-        "op": "action_result",
-        "action": pending.caller_action,
-        "values": values,
-        "status": op.status,
-        "result": True,
-    }
-    if pending.caller_id is not None:
-        payload["id"] = pending.caller_id
-    ctx.send(pending.caller, payload)
+    ctx.send(
+        pending.caller,
+        ActionResult(
+            action=pending.caller_action,
+            values=values,
+            status=op.status,
+            result=True,
+            id=pending.caller_id,
+        ),
+    )
 
 
 def handle_cancel_action_goal(ctx: Context, session: ClientSession, op: CancelActionGoal) -> None:
@@ -171,9 +156,7 @@ def handle_cancel_action_goal(ctx: Context, session: ClientSession, op: CancelAc
         if pending.caller == session.client_id and pending.caller_id == op.id:
             entry = ctx.state.graph.actions.get(pending.action)
             spelling = entry.spelling if entry else pending.action
-            ctx.send(
-                pending.provider, {"op": "cancel_action_goal", "id": goal_id, "action": spelling}
-            )
+            ctx.send(pending.provider, CancelActionGoal(id=goal_id, action=spelling))
             return
     raise OpFailure(f"no pending goal with id {op.id!r} to cancel")
 
@@ -216,10 +199,7 @@ def release_client(ctx: Context, session: ClientSession) -> None:
             del ctx.state.pending_goals[goal_id]
             entry = ctx.state.graph.actions.get(pending.action)
             if entry is not None:
-                ctx.send(
-                    pending.provider,
-                    {"op": "cancel_action_goal", "id": goal_id, "action": entry.spelling},
-                )
+                ctx.send(pending.provider, CancelActionGoal(id=goal_id, action=entry.spelling))
 
 
 ROUTES = (

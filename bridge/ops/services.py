@@ -14,6 +14,7 @@ from bridge.errors import BridgeError, OpFailure
 from bridge.graph import ServiceEntry
 from bridge.names import absolute_name, allowed
 from bridge.ops import route
+from bridge.rosapi.common import RosapiService
 from bridge.session import ClientSession
 from schemas.errors import SchemaError
 from schemas.message import normalize
@@ -35,15 +36,7 @@ def respond(
     ctx: Context, caller: int, service: str, call_id: OpId, values: JsonValue, result: bool
 ) -> None:
     """Send the caller its `service_response`, echoing its service string and id."""
-    payload: JsonObject = {
-        "op": "service_response",
-        "service": service,
-        "values": values,
-        "result": result,
-    }
-    if call_id is not None:
-        payload["id"] = call_id
-    ctx.send(caller, payload)
+    ctx.send(caller, ServiceResponse(service=service, values=values, result=result, id=call_id))
 
 
 def fill_message(ctx: Context, spec: MessageSpec, raw: JsonValue) -> Message:
@@ -75,6 +68,17 @@ def service_type_name(ctx: Context, raw: str) -> str | None:
     return normalize_type_name(raw, "srv")
 
 
+def answer_rosapi(ctx: Context, service: RosapiService, args: JsonValue) -> Message:
+    """A rosapi service's answer, typed by its `.srv` in the registry both ways: the handler
+    gets the request with exactly the request's fields (defaults filled, types checked) and
+    its values go out as the response type says (field order, defaults; a field the `.srv`
+    lacks fails the call)."""
+    srv = ctx.state.registry.service(service.type_name)
+    return fill_message(
+        ctx, srv.response, service.handler(ctx, fill_message(ctx, srv.request, args))
+    )
+
+
 def handle_call_service(ctx: Context, session: ClientSession, op: CallService) -> None:
     name_part, _, suffix = op.service.partition("#")
     call_id = op.id if op.id is not None else (suffix or None)
@@ -95,7 +99,7 @@ def call(
     """Answer a rosapi call (returns its values) or forward it to a provider (returns None)."""
     rosapi = ctx.state.rosapi.get(name)
     if rosapi is not None:
-        return rosapi.handler(ctx, request_fields(ctx, rosapi.type_name, op.args))
+        return answer_rosapi(ctx, rosapi, op.args)
     if not allowed(name, ctx.state.config.services_glob):
         raise OpFailure(f"Service {name} is not allowed by services_glob")
     entry = ctx.state.graph.services.get(name)
@@ -113,10 +117,7 @@ def call(
     ctx.state.pending_calls[request_id] = PendingCall(
         name, provider.client_id, session.client_id, call_id, op.service, timeout_s
     )
-    ctx.send(
-        provider.client_id,
-        {"op": "call_service", "id": request_id, "service": entry.spelling, "args": args},
-    )
+    ctx.send(provider.client_id, CallService(id=request_id, service=entry.spelling, args=args))
     ctx.schedule(("call", request_id), ctx.now_ns + int(timeout_s * NS_PER_S))
     return None
 

@@ -4,12 +4,15 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
 
 from bridge.context import Context
 from bridge.errors import RosapiError
+from schemas.values import Message
 
-RosapiHandler = Callable[[Context, dict[str, Any]], dict[str, Any]]
+#: `(ctx, request) -> response values`. The request has exactly the fields of the service's
+#: `.srv` request in the registry (`bridge.ops.services.answer_rosapi` fills and checks it);
+#: the values are checked against the `.srv` response the same way before they are sent.
+RosapiHandler = Callable[[Context, Message], Message]
 
 
 @dataclass(frozen=True)
@@ -20,11 +23,15 @@ class RosapiService:
     handler: RosapiHandler
 
 
-def text_arg(request: dict[str, Any], field: str) -> str:
-    """A string request field; absent means empty, other types are refused."""
-    value = request.get(field, "")
+def text_arg(request: Message, field: str) -> str:
+    """A `string` field of a request completed against its `.srv`.
+
+    A field the `.srv` does not declare as a string is a bug in the handler, refused here
+    rather than read as an empty string.
+    """
+    value = request.get(field)
     if not isinstance(value, str):
-        raise RosapiError(f"field {field} must be a string, got {type(value).__name__}")
+        raise RosapiError(f"the request has no string field {field!r}")
     return value
 
 

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-from typing import Any
-
 from bridge.context import Context
 from bridge.errors import InvalidNameError, RosapiError
 from bridge.graph import BRIDGE_NODE, ROSAPI_NODE
@@ -11,12 +9,13 @@ from bridge.names import absolute_name
 from bridge.rosapi.common import table, text_arg
 from schemas.errors import SchemaError
 from schemas.typenames import TypeKind, normalize_type_name
+from schemas.values import Message
 
 PREFIX = "/rosapi"
 NS_PER_S = 1_000_000_000
 
 
-def name_arg(request: dict[str, Any], field: str) -> str:
+def name_arg(request: Message, field: str) -> str:
     """An absolute graph name from a request field ("" stays "")."""
     raw = text_arg(request, field)
     try:
@@ -25,7 +24,7 @@ def name_arg(request: dict[str, Any], field: str) -> str:
         raise RosapiError(str(exc)) from exc
 
 
-def type_arg(request: dict[str, Any], kind: TypeKind) -> str:
+def type_arg(request: Message, kind: TypeKind) -> str:
     raw = text_arg(request, "type")
     try:
         return normalize_type_name(raw, kind)
@@ -33,12 +32,12 @@ def type_arg(request: dict[str, Any], kind: TypeKind) -> str:
         raise RosapiError(str(exc)) from exc
 
 
-def topics(ctx: Context, request: dict[str, Any]) -> dict[str, Any]:
+def topics(ctx: Context, request: Message) -> Message:
     entries = ctx.state.graph.typed_topics()
     return {"topics": [name for name, _ in entries], "types": [t for _, t in entries]}
 
 
-def topics_for_type(ctx: Context, request: dict[str, Any]) -> dict[str, Any]:
+def topics_for_type(ctx: Context, request: Message) -> Message:
     wanted = type_arg(request, "msg")
     return {"topics": [name for name, t in ctx.state.graph.typed_topics() if t == wanted]}
 
@@ -50,7 +49,7 @@ def full_text(ctx: Context, type_name: str) -> str:
         return f"# failed to get full definition text for {type_name}: {exc}"
 
 
-def topics_and_raw_types(ctx: Context, request: dict[str, Any]) -> dict[str, Any]:
+def topics_and_raw_types(ctx: Context, request: Message) -> Message:
     entries = ctx.state.graph.typed_topics()
     return {
         "topics": [name for name, _ in entries],
@@ -70,20 +69,20 @@ def service_type_of(ctx: Context, name: str) -> str:
     return entry.type_name or "" if entry is not None else ""
 
 
-def services(ctx: Context, request: dict[str, Any]) -> dict[str, Any]:
+def services(ctx: Context, request: Message) -> Message:
     return {"services": service_names(ctx)}
 
 
-def services_for_type(ctx: Context, request: dict[str, Any]) -> dict[str, Any]:
+def services_for_type(ctx: Context, request: Message) -> Message:
     wanted = type_arg(request, "srv")
     return {"services": [s for s in service_names(ctx) if service_type_of(ctx, s) == wanted]}
 
 
-def service_type(ctx: Context, request: dict[str, Any]) -> dict[str, Any]:
+def service_type(ctx: Context, request: Message) -> Message:
     return {"type": service_type_of(ctx, name_arg(request, "service"))}
 
 
-def topic_type(ctx: Context, request: dict[str, Any]) -> dict[str, Any]:
+def topic_type(ctx: Context, request: Message) -> Message:
     entry = ctx.state.graph.topics.get(name_arg(request, "topic"))
     return {"type": entry.type_name or "" if entry is not None else ""}
 
@@ -100,7 +99,7 @@ def known_nodes(ctx: Context) -> set[str]:
     return {BRIDGE_NODE, ROSAPI_NODE, *client_nodes(ctx), *ctx.state.external_nodes, *owners}
 
 
-def nodes(ctx: Context, request: dict[str, Any]) -> dict[str, Any]:
+def nodes(ctx: Context, request: Message) -> Message:
     return {"nodes": sorted(known_nodes(ctx))}
 
 
@@ -111,7 +110,7 @@ def provider_of(ctx: Context, service: str) -> str:
     return entry.provider if entry is not None else ""
 
 
-def node_details(ctx: Context, request: dict[str, Any]) -> dict[str, Any]:
+def node_details(ctx: Context, request: Message) -> Message:
     node = name_arg(request, "node")
     if node not in known_nodes(ctx):
         raise RosapiError(f"Node {node} does not exist")
@@ -120,40 +119,40 @@ def node_details(ctx: Context, request: dict[str, Any]) -> dict[str, Any]:
     return {"subscribing": subscribing, "publishing": publishing, "services": provided}
 
 
-def publishers(ctx: Context, request: dict[str, Any]) -> dict[str, Any]:
+def publishers(ctx: Context, request: Message) -> Message:
     entry = ctx.state.graph.topics.get(name_arg(request, "topic"))
     return {"publishers": sorted(entry.publishers) if entry is not None else []}
 
 
-def subscribers(ctx: Context, request: dict[str, Any]) -> dict[str, Any]:
+def subscribers(ctx: Context, request: Message) -> Message:
     entry = ctx.state.graph.topics.get(name_arg(request, "topic"))
     return {"subscribers": sorted(entry.subscribers) if entry is not None else []}
 
 
-def service_providers(ctx: Context, request: dict[str, Any]) -> dict[str, Any]:
+def service_providers(ctx: Context, request: Message) -> Message:
     node = provider_of(ctx, name_arg(request, "service"))
     return {"providers": [node] if node else []}
 
 
-def service_node(ctx: Context, request: dict[str, Any]) -> dict[str, Any]:
+def service_node(ctx: Context, request: Message) -> Message:
     return {"node": provider_of(ctx, name_arg(request, "service"))}
 
 
-def action_servers(ctx: Context, request: dict[str, Any]) -> dict[str, Any]:
+def action_servers(ctx: Context, request: Message) -> Message:
     return {"action_servers": sorted(ctx.state.graph.actions)}
 
 
-def action_type(ctx: Context, request: dict[str, Any]) -> dict[str, Any]:
+def action_type(ctx: Context, request: Message) -> Message:
     entry = ctx.state.graph.actions.get(name_arg(request, "action"))
     return {"type": entry.type_name or "" if entry is not None else ""}
 
 
-def get_time(ctx: Context, request: dict[str, Any]) -> dict[str, Any]:
+def get_time(ctx: Context, request: Message) -> Message:
     sec, nanosec = divmod(ctx.now_ns, NS_PER_S)
     return {"time": {"sec": sec, "nanosec": nanosec}}
 
 
-def get_ros_version(ctx: Context, request: dict[str, Any]) -> dict[str, Any]:
+def get_ros_version(ctx: Context, request: Message) -> Message:
     return {"version": 2, "distro": ctx.state.config.distro}
 
 

@@ -5,14 +5,13 @@ Values are JSON text both ways, as rosapi clients `json.loads` / `JSON.parse` th
 
 from __future__ import annotations
 
-from typing import Any
-
 from bridge.context import Context
 from bridge.errors import RosapiError
 from bridge.rosapi.common import table, text_arg
 from schemas import codec_json
 from schemas.errors import DecodeError
 from schemas.safety import echo
+from schemas.values import Message
 
 PREFIX = "/rosapi"
 # Parameters are kept in the bridge for every client to read: bound what one client can store.
@@ -21,7 +20,7 @@ MAX_PARAM_NAME_CHARS = 256
 MAX_PARAM_VALUE_CHARS = 64 * 1024
 
 
-def param_name(request: dict[str, Any]) -> str:
+def param_name(request: Message) -> str:
     name = text_arg(request, "name")
     if not name:
         raise RosapiError("parameter name must not be empty")
@@ -33,7 +32,7 @@ def param_name(request: dict[str, Any]) -> str:
     return name
 
 
-def get_param(ctx: Context, request: dict[str, Any]) -> dict[str, Any]:
+def get_param(ctx: Context, request: Message) -> Message:
     name = param_name(request)
     if name in ctx.state.params:
         return {"value": ctx.state.params[name], "successful": True, "reason": ""}
@@ -43,7 +42,7 @@ def get_param(ctx: Context, request: dict[str, Any]) -> dict[str, Any]:
     return {"value": "null", "successful": False, "reason": f"Parameter {name} is not set"}
 
 
-def set_param(ctx: Context, request: dict[str, Any]) -> dict[str, Any]:
+def set_param(ctx: Context, request: Message) -> Message:
     name = param_name(request)
     value = text_arg(request, "value")
     if len(value) > MAX_PARAM_VALUE_CHARS:
@@ -58,18 +57,18 @@ def set_param(ctx: Context, request: dict[str, Any]) -> dict[str, Any]:
     return {"successful": True, "reason": ""}
 
 
-def has_param(ctx: Context, request: dict[str, Any]) -> dict[str, Any]:
+def has_param(ctx: Context, request: Message) -> Message:
     return {"exists": param_name(request) in ctx.state.params}
 
 
-def delete_param(ctx: Context, request: dict[str, Any]) -> dict[str, Any]:
+def delete_param(ctx: Context, request: Message) -> Message:
     name = param_name(request)
     if ctx.state.params.pop(name, None) is None:
         return {"successful": False, "reason": f"Parameter {name} is not set"}
     return {"successful": True, "reason": ""}
 
 
-def get_param_names(ctx: Context, request: dict[str, Any]) -> dict[str, Any]:
+def get_param_names(ctx: Context, request: Message) -> Message:
     return {"names": sorted(ctx.state.params)}
 
 

@@ -2,24 +2,23 @@
 
 from __future__ import annotations
 
-from typing import Any
-
 from bridge.context import Context
 from bridge.errors import RosapiError
 from bridge.rosapi.common import table, text_arg
 from schemas.errors import SchemaError
+from schemas.values import Message
 
 PREFIX = "/rosapi"
 
 
-def message_details(ctx: Context, request: dict[str, Any]) -> dict[str, Any]:
+def message_details(ctx: Context, request: Message) -> Message:
     try:
         return {"typedefs": ctx.state.registry.typedefs(text_arg(request, "type"))}
     except SchemaError as exc:
         raise RosapiError(str(exc)) from exc
 
 
-def _service_part_details(ctx: Context, request: dict[str, Any], part: str) -> dict[str, Any]:
+def _service_part_details(ctx: Context, request: Message, part: str) -> Message:
     try:
         spec = ctx.state.registry.service(text_arg(request, "type"))
         return {"typedefs": ctx.state.registry.typedefs(getattr(spec, part).name)}
@@ -27,15 +26,15 @@ def _service_part_details(ctx: Context, request: dict[str, Any], part: str) -> d
         raise RosapiError(str(exc)) from exc
 
 
-def service_request_details(ctx: Context, request: dict[str, Any]) -> dict[str, Any]:
+def service_request_details(ctx: Context, request: Message) -> Message:
     return _service_part_details(ctx, request, "request")
 
 
-def service_response_details(ctx: Context, request: dict[str, Any]) -> dict[str, Any]:
+def service_response_details(ctx: Context, request: Message) -> Message:
     return _service_part_details(ctx, request, "response")
 
 
-def _action_part_details(ctx: Context, request: dict[str, Any], part: str) -> dict[str, Any]:
+def _action_part_details(ctx: Context, request: Message, part: str) -> Message:
     try:
         spec = ctx.state.registry.action(text_arg(request, "type"))
         return {"typedefs": ctx.state.registry.typedefs(getattr(spec, part).name)}
@@ -43,19 +42,19 @@ def _action_part_details(ctx: Context, request: dict[str, Any], part: str) -> di
         raise RosapiError(str(exc)) from exc
 
 
-def action_goal_details(ctx: Context, request: dict[str, Any]) -> dict[str, Any]:
+def action_goal_details(ctx: Context, request: Message) -> Message:
     return _action_part_details(ctx, request, "goal")
 
 
-def action_result_details(ctx: Context, request: dict[str, Any]) -> dict[str, Any]:
+def action_result_details(ctx: Context, request: Message) -> Message:
     return _action_part_details(ctx, request, "result")
 
 
-def action_feedback_details(ctx: Context, request: dict[str, Any]) -> dict[str, Any]:
+def action_feedback_details(ctx: Context, request: Message) -> Message:
     return _action_part_details(ctx, request, "feedback")
 
 
-def interfaces(ctx: Context, request: dict[str, Any]) -> dict[str, Any]:
+def interfaces(ctx: Context, request: Message) -> Message:
     registry = ctx.state.registry
     return {
         "interfaces": [

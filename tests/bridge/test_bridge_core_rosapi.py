@@ -176,3 +176,50 @@ def test_disconnected_clients_vanish_from_rosapi(graph):
         "/rosbridge_client_4",
         "/rosbridge_websocket",
     ]
+
+
+#: A request for each rosapi service that it can answer with `result: true` in `graph`.
+TYPED_REQUESTS = {
+    "topics_for_type": {"type": "std_msgs/String"},
+    "services_for_type": {"type": "std_srvs/SetBool"},
+    "service_type": {"service": "/set"},
+    "topic_type": {"topic": "/chatter"},
+    "node_details": {"node": "/rosapi"},
+    "publishers": {"topic": "/chatter"},
+    "subscribers": {"topic": "/chatter"},
+    "service_providers": {"service": "/set"},
+    "service_node": {"service": "/set"},
+    "action_type": {"action": "/fib"},
+    "message_details": {"type": "std_msgs/String"},
+    "service_request_details": {"type": "std_srvs/SetBool"},
+    "service_response_details": {"type": "std_srvs/SetBool"},
+    "action_goal_details": {"type": "example_interfaces/Fibonacci"},
+    "action_result_details": {"type": "example_interfaces/Fibonacci"},
+    "action_feedback_details": {"type": "example_interfaces/Fibonacci"},
+    "get_param": {"name": "/p", "default_value": "1"},
+    "set_param": {"name": "/p", "value": "1"},
+    "has_param": {"name": "/p"},
+    "delete_param": {"name": "/p"},
+}
+
+
+def test_every_rosapi_answer_has_the_fields_of_its_srv_response(graph):
+    """Requests and responses are typed by the `.srv` files in the registry, both ways."""
+    h, client = graph
+    for name, service in sorted(h.state.rosapi.items()):
+        short = name.removeprefix("/rosapi/")
+        answer = values(h, client, name, TYPED_REQUESTS.get(short, {}))
+        response = h.state.registry.service(service.type_name).response
+        assert list(answer) == [field.name for field in response.fields], name
+
+
+def test_a_rosapi_answer_its_srv_does_not_declare_fails_the_call(harness):
+    from bridge.rosapi import RosapiService
+
+    def misspelt(ctx, request):
+        return {"node": ["/a"]}
+
+    harness.state.rosapi["/rosapi/misspelt"] = RosapiService("rosapi_msgs/srv/Nodes", misspelt)
+    response = harness.call(harness.connect(), "/rosapi/misspelt")
+    assert response["result"] is False
+    assert response["values"].startswith("rosapi_msgs/srv/Nodes_Response field 'node': no such")

@@ -13,7 +13,13 @@ from clients.errors import ProtocolError
 from clients.events import ServiceReply, TopicMessage
 from clients.fragments import FragmentAssembler
 from clients.protocol import ClientProtocol
+from schemas.ops import Fragment, validate_op
 from schemas.registry import TypeRegistry
+
+
+def fragment(frame: str) -> Fragment:
+    """One of rosbridge's fragment frames read by the model the client reads it with."""
+    return validate_op(Fragment, orjson.loads(frame))
 
 
 @pytest.fixture
@@ -54,8 +60,8 @@ def test_fragmented_service_response_uses_its_id(proto):
 
 def test_interleaved_fragment_ids_are_kept_apart():
     assembler = FragmentAssembler()
-    a = [orjson.loads(f) for f in rosbridge_fragments('{"op":"a","x":"' + "a" * 40 + '"}', 20, "A")]
-    b = [orjson.loads(f) for f in rosbridge_fragments('{"op":"b","x":"' + "b" * 40 + '"}', 20, "B")]
+    a = [fragment(f) for f in rosbridge_fragments('{"op":"a","x":"' + "a" * 40 + '"}', 20, "A")]
+    b = [fragment(f) for f in rosbridge_fragments('{"op":"b","x":"' + "b" * 40 + '"}', 20, "B")]
     done = [assembler.add(op, 1) for pair in zip(a, b, strict=True) for op in pair]
     texts = [d.text for d in done if d is not None]
     assert [orjson.loads(t)["op"] for t in texts] == ["a", "b"]
@@ -64,8 +70,8 @@ def test_interleaved_fragment_ids_are_kept_apart():
 
 def test_restarted_fragment_id_discards_the_unfinished_message():
     assembler = FragmentAssembler()
-    first = [orjson.loads(f) for f in rosbridge_fragments('{"op":"one"}' + " " * 30, 10)]
-    second = [orjson.loads(f) for f in rosbridge_fragments('{"op":"two"}' + " " * 30, 10)]
+    first = [fragment(f) for f in rosbridge_fragments('{"op":"one"}' + " " * 30, 10)]
+    second = [fragment(f) for f in rosbridge_fragments('{"op":"two"}' + " " * 30, 10)]
     assert assembler.add(first[0], 1) is None
     results = [assembler.add(op, 1) for op in second]
     assert orjson.loads(results[-1].text) == {"op": "two"}
@@ -75,7 +81,7 @@ def test_restarted_fragment_id_discards_the_unfinished_message():
 def test_partial_messages_are_bounded():
     assembler = FragmentAssembler(max_partial=2)
     for key in range(5):
-        assembler.add({"op": "fragment", "id": key, "num": 0, "total": 2, "data": "{"}, 1)
+        assembler.add(Fragment(id=key, num=0, total=2, data="{"), 1)
     assert assembler.pending == 2 and assembler.discarded == 3
 
 
@@ -117,7 +123,7 @@ def test_fragmented_png_is_decoded(proto):
 @given(text=st.text(min_size=1, max_size=400), size=st.integers(1, 64), seed=st.integers(0, 99))
 def test_any_text_survives_fragmentation_in_any_order(text, size, seed):
     assembler = FragmentAssembler()
-    ops = [orjson.loads(f) for f in rosbridge_fragments(text, size)]
+    ops = [fragment(f) for f in rosbridge_fragments(text, size)]
     order = np.random.default_rng(seed).permutation(len(ops))
     results = [assembler.add(ops[i], 1) for i in order]
     assert all(r is None for r in results[:-1])

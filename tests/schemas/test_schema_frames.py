@@ -1,7 +1,8 @@
 import cbor2
 import numpy as np
 
-from schemas import codec_cbor, codec_json, frames
+from schemas import codec_cbor, codec_json, frames, ops
+from schemas.ops import parse_op, to_wire
 
 
 def test_publish_json_key_order_and_content():
@@ -31,3 +32,30 @@ def test_publish_cbor_raw_envelope():
 
 def test_topic_is_echoed_unchanged():
     assert codec_json.loads(frames.publish_json("chatter", {}))["topic"] == "chatter"
+
+
+def test_publish_frames_read_back_through_the_publish_model():
+    """The typed writers and `schemas.ops.Publish` are one definition of the op."""
+    msg = {"data": "hi"}
+    for frame in (frames.publish_json("/t", msg), frames.publish_cbor("/t", msg)):
+        raw = codec_json.loads(frame) if frame[:1] == b"{" else codec_cbor.loads(frame)
+        op = parse_op(raw)
+        assert isinstance(op, ops.Publish) and to_wire(op) == raw
+
+
+def test_fragments_read_back_through_the_fragment_model():
+    text = '{"op":"publish","topic":"/t","msg":{"data":"' + "x" * 30 + '"}}'
+    pieces = frames.fragments_json(text, 25, "call:1")
+    read = [parse_op(codec_json.loads(piece)) for piece in pieces]
+    assert all(isinstance(op, ops.Fragment) for op in read)
+    assert [to_wire(op) for op in read] == [codec_json.loads(piece) for piece in pieces]
+    assert "".join(op.data for op in read if isinstance(op, ops.Fragment)) == text
+
+
+def test_fragments_echo_any_id_and_count_with_an_integer_total():
+    pieces = frames.fragments_json("abcde", 2, 1.5)
+    assert pieces == [
+        b'{"op":"fragment","id":1.5,"data":"ab","num":0,"total":3}',
+        b'{"op":"fragment","id":1.5,"data":"cd","num":1,"total":3}',
+        b'{"op":"fragment","id":1.5,"data":"e","num":2,"total":3}',
+    ]
