@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import logging
 
-from clients.stack.node_cli import add_node_arguments, run_node
+from clients.node.cli import add_node_arguments, run_node
 from navigation.config import NavigationConfig, load_config
 from navigation.node import serve
 

@@ -21,9 +21,9 @@ from dataclasses import replace
 import pytest
 
 from clients import RosbridgeClient
-from clients.stack.child import Component
+from clients.node.child import Component
+from clients.node.output import PrefixedLogHandler, PrefixedOutput
 from clients.stack.launcher import LaunchConfig, Supervisor, stack_components
-from clients.stack.output import PrefixedLogHandler, PrefixedOutput
 
 from .processes import kill_leftovers, repo_env, wait_gone
 

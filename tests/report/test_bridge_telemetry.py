@@ -15,9 +15,10 @@ from prometheus_client.parser import text_string_to_metric_families
 from bridge.config import BridgeConfig
 from bridge.server import run_bridge
 from clients import RosbridgeClient
+from clients.node.links import node_links
+from clients.node.telemetry import telemetry
 from clients.report.journeys import spans_of_batch
-from clients.stack.node_links import node_links
-from clients.tracing import Tracer, telemetry
+from clients.tracing import Tracer
 from schemas.tracing import (
     STATS_SERVICE,
     STATS_SERVICE_TYPE,

@@ -20,8 +20,9 @@ from collections.abc import AsyncIterator
 from dataclasses import dataclass
 
 from clients.client import RosbridgeClient
+from clients.node.telemetry import telemetry
 from clients.protocol import Encoding
-from clients.tracing import Tracer, telemetry
+from clients.tracing import Tracer
 from schemas.runtime.process import freeze_startup_heap, tune_process
 
 
