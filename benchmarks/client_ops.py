@@ -5,7 +5,7 @@ method that returns the frame (state bookkeeping, model, encoding) and of
 ``codec_json.dumps`` of a plain dict with the same keys (the floor), and their ratio. Then
 ``encode_publish`` of an IMU-sized message and of a 4 MB PointCloud2 (345,600 points) in JSON
 and CBOR next to ``schemas.frames.publish_*`` of the same message (what the bridge uses).
-Run as ``python benchmarks/client_ops.py``; medians hold up on a loaded machine, ratios more so.
+Run as ``python -m benchmarks.client_ops``; medians hold up on a loaded machine, ratios more so.
 """
 
 from __future__ import annotations

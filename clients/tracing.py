@@ -1,9 +1,10 @@
-"""Stage tracing for client processes: record spans cheaply, publish them in small batches.
+"""Stage tracing for client processes: record spans cheaply, to be published in small batches.
 
 A :class:`Tracer` is handed to :class:`clients.RosbridgeClient` (``tracer=``), which records
 ``encode`` and ``send`` for every publish and ``decode`` for every received message that has a
 ``header.stamp``; the simulator and navigation record their own stages (``generate``,
-``wait``, ``process``...) into the same tracer; :mod:`clients.node.telemetry` publishes
+``wait``, ``process``...) into the same tracer (``tracer.spans.record`` or
+:meth:`Tracer.processed`); :mod:`clients.node.telemetry` publishes
 them (docs/tracing.md). Recording costs a few ``time.time_ns()`` calls and one tuple append;
 it never waits.
 """
@@ -38,19 +39,6 @@ class Tracer:
         self._sampler = ResourceSampler()
         self._identity = this_process(process)
         self._decoded: OrderedDict[tuple[str, int], int] = OrderedDict()
-
-    def record(
-        self,
-        topic: str,
-        stamp_ns: int,
-        stage: str,
-        start_ns: int,
-        end_ns: int,
-        payload_bytes: int = 0,
-        wire_bytes: int = 0,
-    ) -> None:
-        """One stage of the message ``(topic, stamp_ns)``, wall-clock ns."""
-        self.spans.record(topic, stamp_ns, stage, start_ns, end_ns, payload_bytes, wire_bytes)
 
     def published(
         self,

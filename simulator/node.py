@@ -281,7 +281,7 @@ class SimulatorNode:
     def _generated(self, topic: Topic, stamp_ns: int) -> None:
         """Trace `generate` of the thesis's sensors: capture (the stamp) -> message ready."""
         if self._tracer is not None and topic.thesis_sensor:
-            self._tracer.record(topic.name, stamp_ns, "generate", stamp_ns, self._clock_ns())
+            self._tracer.spans.record(topic.name, stamp_ns, "generate", stamp_ns, self._clock_ns())
 
     async def _log_timings(self) -> None:
         log.info(
