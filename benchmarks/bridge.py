@@ -10,7 +10,7 @@ from just before the publisher encodes to just after the subscriber decoded:
 4. the CBOR cloud fanned out to 4 subscribers (latency to the last of them).
 
 Prints median, p90, p99 and max per case.
-Usage: python benchmarks/bridge.py [--messages N] [--no-offload] [--default-malloc]
+Usage: python -m benchmarks.bridge [--messages N] [--no-offload] [--default-malloc]
 """
 
 from __future__ import annotations
@@ -29,6 +29,7 @@ import time
 import numpy as np
 import websockets
 
+from benchmarks.malloc import malloc_tuned, rerun_tuned
 from schemas import codec_cbor, codec_json
 from schemas.pointcloud import pack_points
 from schemas.runtime.process import MALLOC_ENV as TUNED_MALLOC
@@ -231,9 +232,9 @@ def main(argv: list[str] | None = None) -> int:
     )
     args = parser.parse_args(argv)
     tuned = not args.default_malloc
-    if tuned and argv is None and not all(k in os.environ for k in TUNED_MALLOC):
+    if tuned and argv is None and not malloc_tuned():
         # The clients in this process allocate 4 MB buffers too: restart with the same tuning.
-        os.execve(sys.executable, [sys.executable, *sys.argv], {**os.environ, **TUNED_MALLOC})
+        rerun_tuned(__spec__.name, sys.argv[1:])
     asyncio.run(run(args.messages, tuned, not args.no_offload))
     return 0
 

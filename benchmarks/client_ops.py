@@ -7,7 +7,7 @@ method that returns the frame (state bookkeeping, model, encoding) and of
 and CBOR next to ``schemas.frames.publish_*`` of the same message (what the bridge uses).
 Then, inbound, ``ClientProtocol.receive`` of each op a server sends (decode, reading into its
 `schemas.ops` model, routing) next to ``codec_json.loads`` of the same frame.
-Run as ``python benchmarks/client_ops.py``; medians hold up on a loaded machine, ratios more so.
+Run as ``python -m benchmarks.client_ops``; medians hold up on a loaded machine, ratios more so.
 """
 
 from __future__ import annotations

@@ -2,7 +2,7 @@
 
 Prints min and median milliseconds of each step of the message path: normalize, JSON
 dumps/loads (bytes as base64), CBOR dumps/loads, CDR to/from, PNG. Run as
-``python benchmarks/codecs.py``; ``--tuned-malloc`` re-runs itself with glibc malloc
+``python -m benchmarks.codecs``; ``--tuned-malloc`` re-runs itself with glibc malloc
 thresholds raised, which removes most of the page-fault cost of fresh 4 MB buffers on this
 kind of VM (reference/performance-measurements.md, "Page-fault note").
 """
@@ -10,7 +10,6 @@ kind of VM (reference/performance-measurements.md, "Page-fault note").
 from __future__ import annotations
 
 import argparse
-import os
 import statistics
 import sys
 import time
@@ -18,13 +17,13 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
+from benchmarks.malloc import malloc_tuned, rerun_tuned
 from schemas import codec_cbor, codec_json, frames
 from schemas.codec_cdr import from_cdr, to_cdr
 from schemas.codec_png import decode_png_data, encode_png_op
 from schemas.message import normalize
 from schemas.pointcloud import pack_points
 from schemas.registry import TypeRegistry
-from schemas.runtime.process import MALLOC_ENV as TUNED_MALLOC
 from schemas.safety import frame_problem
 
 LIDAR_POINTS = 345_600  # thesis LIDAR: 1440 azimuth x 240 elevation rays
@@ -95,11 +94,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         "--tuned-malloc", action="store_true", help="re-run with raised glibc malloc thresholds"
     )
     args = parser.parse_args(argv)
-    if args.tuned_malloc and os.environ.get("MALLOC_MMAP_THRESHOLD_") is None:
-        env = {**os.environ, **TUNED_MALLOC}
-        script_args = [a for a in (argv if argv is not None else sys.argv[1:])]
-        os.execve(sys.executable, [sys.executable, os.path.abspath(__file__), *script_args], env)
-    tuned = os.environ.get("MALLOC_MMAP_THRESHOLD_") is not None
+    if args.tuned_malloc and not malloc_tuned():
+        rerun_tuned(__spec__.name, argv if argv is not None else sys.argv[1:])
+    tuned = malloc_tuned()
     print(
         f"PointCloud2 {args.points} points x {POINT_STEP_BYTES} B = "
         f"{args.points * POINT_STEP_BYTES / 1e6:.2f} MB; {args.repeats} repeats; "

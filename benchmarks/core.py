@@ -12,18 +12,14 @@ on the core call 10.6 / 11.6; with the two per-frame value objects (`InboundFram
 `ValidMessage`) no longer frozen dataclasses 9.3-9.8 / 10.7-11.2. 10 subscribers: 25-28 µs
 in all three.
 
-Usage: python benchmarks/core.py [--frames 50000] [--repeat 5]
+Usage: python -m benchmarks.core [--frames 50000] [--repeat 5]
 """
 
 from __future__ import annotations
 
 import argparse
 import statistics
-import sys
 import time
-from pathlib import Path
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from bridge.config import BridgeConfig
 from bridge.core import BridgeCore

@@ -8,7 +8,7 @@ The trend is a least-squares line through the heap's floor (the minimum per wind
 survives garbage collection), in MiB per minute.
 
 Starts ``python -m clients.stack.up_cli --port 0`` itself unless ``--url`` names a running bridge.
-Usage: python benchmarks/dashboard.py [--minutes N] [--url http://127.0.0.1:9090/]
+Usage: python -m benchmarks.dashboard [--minutes N] [--url http://127.0.0.1:9090/]
 """
 
 from __future__ import annotations

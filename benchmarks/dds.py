@@ -14,7 +14,7 @@ Cases:
               the rate and an iptables rule for loss (this kernel: no netem, so no delay)
 The namespace cases need root and iproute2; they are skipped with the reason otherwise.
 
-Usage: python benchmarks/dds.py [--seconds 20] [--cases one-bridge,dds-lo,dds-veth,dds-wlan]
+Usage: python -m benchmarks.dds [--seconds 20] [--cases one-bridge,dds-lo,dds-veth,dds-wlan]
        [--wlan-rate-mbit 150 --wlan-delay-ms 2 --wlan-jitter-ms 1 --wlan-loss 0.1]
 """
 
@@ -31,20 +31,15 @@ import subprocess
 import sys
 import time
 from collections.abc import Iterator
-from pathlib import Path
 
 import numpy as np
 import websockets
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path[:0] = [str(ROOT), str(ROOT / "tests"), str(ROOT / "tests" / "dds")]
-
-from child_process import Running, repo_env  # noqa: E402
-from dds_netns import Host, LinkShape, shape_link, two_hosts, why_not  # noqa: E402
-
-from schemas import codec_cbor  # noqa: E402
-from schemas.pointcloud import pack_points  # noqa: E402
-from schemas.runtime.process import MALLOC_ENV as TUNED_MALLOC  # noqa: E402
+from schemas import codec_cbor
+from schemas.pointcloud import pack_points
+from schemas.runtime.process import MALLOC_ENV as TUNED_MALLOC
+from tests.child_process import Running, repo_env
+from tests.dds.dds_netns import Host, LinkShape, shape_link, two_hosts, why_not
 
 SCAN_POINTS = 345_600  # Table 4.3: 1440 x 240 rays at 0.25 degrees
 POINT_STEP = 16  # x, y, z, intensity float32
@@ -142,7 +137,8 @@ async def subscribe(url: str, seconds: float, warmup_s: float) -> dict:
 def role_argv(role: str, url: str, seconds: float, host: Host | None) -> list[str]:
     argv = [
         sys.executable,
-        str(Path(__file__).resolve()),
+        "-m",
+        "benchmarks.dds",
         "--role",
         role,
         "--url",

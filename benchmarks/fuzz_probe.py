@@ -15,7 +15,7 @@ operator's disk sees) and then:
    `--topics-glob '/allowed/*'`; an `advertise_action` against `--services-glob`; the `auth`
    op.
 
-Usage: python benchmarks/fuzz_probe.py [--frames 20000] [--connections 4] [--rate 100]
+Usage: python -m benchmarks.fuzz_probe [--frames 20000] [--connections 4] [--rate 100]
        [--checks] [--seed 0] [--bridge-root /work/main] [--keep-log FILE]
 """
 
@@ -44,10 +44,8 @@ from pathlib import Path
 import websockets
 from websockets.exceptions import ConnectionClosed
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path[:0] = [str(ROOT), str(ROOT / "tests" / "bridge")]
-
-from hostile_frames import HostileFrames  # noqa: E402
+from tests.bridge.hostile_frames import HostileFrames
+from tests.child_process import REPO_ROOT as ROOT
 
 LISTENING = re.compile(r"listening on wss?://[^\s:]+:(\d+)")
 HEALTHY_TOPIC = "/healthy"

@@ -1,6 +1,6 @@
 """Per-step times of the navigation core against the project's targets (2 cores).
 
-    python benchmarks/navigation.py [--repeat 30] [--sustained-scans 20] [--only-sustained]
+    python -m benchmarks.navigation [--repeat 30] [--sustained-scans 20] [--only-sustained]
 
 LIDAR runs on the simulator's full 345,600-ray scan (``simulator.scene.build_scene`` and
 ``simulator.lidar.Lidar``) and on a denser synthetic river scene whose water returns (the
@@ -22,45 +22,35 @@ import argparse
 import asyncio
 import logging
 import statistics
-import sys
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 from sklearn.cluster import DBSCAN
 from sklearn.metrics import adjusted_rand_score
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path[:0] = [
-    str(ROOT),
-    str(ROOT / "tests"),
-    str(ROOT / "tests" / "navigation"),
-    str(ROOT / "tests" / "simulator"),
-]
-
-from clients import RosbridgeClient  # noqa: E402
-from navigation.boxes import refine_boxes  # noqa: E402
-from navigation.camera import decode_gray, edges, extract_lines, hough_lines, line_array_msg  # noqa: E402
-from navigation.cfar import CfarDetector  # noqa: E402
-from navigation.config import (  # noqa: E402
+from clients import RosbridgeClient
+from navigation.boxes import refine_boxes
+from navigation.camera import decode_gray, edges, extract_lines, hough_lines, line_array_msg
+from navigation.cfar import CfarDetector
+from navigation.config import (
     CameraConfig,
     CfarConfig,
     FusionConfig,
     LidarConfig,
     NavigationConfig,
 )
-from navigation.fusion import obstacle_grid, occupancy_grid_msg  # noqa: E402
-from navigation.imu import rate_stats  # noqa: E402
-from navigation.lidar import cluster_obstacles, obstacle_points, process_scan  # noqa: E402
-from navigation.lidar_messages import box_array_msg, marker_array_msg  # noqa: E402
-from navigation.messages import stamp_ns_of  # noqa: E402
-from navigation.node import SENSOR_INPUTS, NavigationNode  # noqa: E402
-from navigation.processors import OUTPUT_TYPES, TOPIC_BOXES, Processors  # noqa: E402
-from navigation.radar import PolarGeometry, detect, detection_array_msg, radar_power  # noqa: E402
-from schemas.pointcloud import pack_points, view_points  # noqa: E402
-from schemas.runtime.process import single_threaded_blas  # noqa: E402
+from navigation.fusion import obstacle_grid, occupancy_grid_msg
+from navigation.imu import rate_stats
+from navigation.lidar import cluster_obstacles, obstacle_points, process_scan
+from navigation.lidar_messages import box_array_msg, marker_array_msg
+from navigation.messages import stamp_ns_of
+from navigation.node import SENSOR_INPUTS, NavigationNode
+from navigation.processors import OUTPUT_TYPES, TOPIC_BOXES, Processors
+from navigation.radar import PolarGeometry, detect, detection_array_msg, radar_power
+from schemas.pointcloud import pack_points, view_points
+from schemas.runtime.process import single_threaded_blas
 
 log = logging.getLogger("benchmarks.navigation")
 
@@ -114,7 +104,7 @@ def simulator_scan() -> tuple[dict, str]:
 
 
 def synthetic_scan() -> tuple[np.ndarray, str]:
-    from nav_scenes import default_scene, lidar_directions, raycast, with_noise
+    from tests.navigation.nav_scenes import default_scene, lidar_directions, raycast, with_noise
 
     scene = default_scene()
     points, ids = raycast(scene, lidar_directions(0.25, 0.25))
@@ -189,7 +179,7 @@ def radar_image() -> tuple[dict, str]:
             radar.close()
     except Exception as exc:
         log.warning("simulator radar unavailable (%s); using synthetic clutter", exc)
-        from nav_scenes import radar_noise_image
+        from tests.navigation.nav_scenes import radar_noise_image
 
         power = radar_noise_image(72, 800, 1.0, seed=0)
         power[::9, 300] = 100.0
@@ -442,7 +432,7 @@ def distribution(values: list[float]) -> str:
 
 
 def run_sustained(count: int) -> None:
-    from sim_processes import running_bridge
+    from tests.simulator.sim_processes import running_bridge
 
     scans = simulator_scans(count)
     points = [len(scan) for scan in scans]

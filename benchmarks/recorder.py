@@ -12,7 +12,7 @@ For each it prints, per topic, the messages the bridge received in the window
 the window, the recorder's messages/s, MB/s (CDR) and CPU, the file size (zstd) and the
 machine's load. ``--burn N`` runs N busy-looping processes meanwhile (a loaded machine).
 
-Usage: python benchmarks/recorder.py [--window S] [--case stack|scans|all] [--scan-hz 2 5 10]
+Usage: python -m benchmarks.recorder [--window S] [--case stack|scans|all] [--scan-hz 2 5 10]
        [--burn N] [--compression zstd|lz4|none]
 """
 

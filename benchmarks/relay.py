@@ -19,7 +19,7 @@ that behave like a careful third-party client: big JSON frames are encoded and d
 thread, in order, as riverbridge's own client library does, so the clients add as little as
 they can.
 
-Usage: python benchmarks/relay.py [--only burst,sustained,scan] [--encodings json,cbor]
+Usage: python -m benchmarks.relay [--only burst,sustained,scan] [--encodings json,cbor]
        [--repeat N] [--compare /work/main] [--floor] [--url ws://host:port]
        [-- bridge options...]
 With --repeat, --compare (another checkout's bridge) or --floor (a bare websockets relay that
@@ -60,8 +60,8 @@ from multiprocessing.connection import Connection
 from typing import Any
 
 import numpy as np
-from relay_roles import cpu_s, run_role
 
+from benchmarks.relay_roles import cpu_s, run_role
 from schemas.runtime.process import MALLOC_ENV as TUNED_MALLOC
 
 WARMUP_S = 1.0  # scan workload: samples stamped in the first second are not counted

@@ -13,7 +13,7 @@ pid: a restarted component is followed) and the IMU latency p50/p99 of that minu
 it prints the table, the RSS growth of each process after the first two minutes (slope by least
 squares, MiB per minute) and writes soak.csv and soak.png (matplotlib) to --output.
 
-Usage: python benchmarks/soak.py [--minutes 30] [--output artifacts/soak]
+Usage: python -m benchmarks.soak [--minutes 30] [--output artifacts/soak]
 """
 
 from __future__ import annotations
@@ -35,8 +35,7 @@ import numpy as np
 import websockets
 from websockets.exceptions import ConnectionClosed
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path[:0] = [str(ROOT)]
+from tests.child_process import REPO_ROOT as ROOT
 
 CONNECT = re.compile(r"connect to (ws://[\d.]+:\d+)")
 STARTED = re.compile(r"\[up\]\s+started (\w+) \(pid (\d+)\)")

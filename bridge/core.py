@@ -18,14 +18,14 @@ from bridge.errors import BridgeError, InvalidNameError
 from bridge.inbound import InboundFrame, RefusedFrame, decode_frame, read_frame
 from bridge.names import absolute_name
 from bridge.ops import OpRoute, actions, auth, fragments, levels, merge_routes, services, topics
-from bridge.outgoing import MIN_FRAGMENT_SIZE, TopicMessage, payload_size
+from bridge.outgoing import MIN_FRAGMENT_SIZE, TopicMessage
 from bridge.rosapi import ROSAPI_SERVICES
 from bridge.rosapi.common import RosapiService
 from bridge.session import ClientSession
 from bridge.sinks import MessageSink
 from bridge.validation import PublishCheck
 from schemas.errors import SchemaError
-from schemas.message import normalize
+from schemas.message import normalize, payload_bytes
 from schemas.ops import MAX_NAME_CHARS, OpError, reply_id
 from schemas.registry import TypeRegistry
 from schemas.safety import echo, safe_text
@@ -121,7 +121,7 @@ class BridgeCore:
         ):
             return None
         raw = message.get("msg")
-        if not isinstance(raw, dict) or payload_size(raw) * 2 >= frame.wire_bytes:
+        if not isinstance(raw, dict) or payload_bytes(raw) * 2 >= frame.wire_bytes:
             return None
         spec = self._presumed_spec(message)
         if spec is None:

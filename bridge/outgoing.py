@@ -13,12 +13,11 @@ from dataclasses import dataclass
 from functools import cached_property
 from typing import Any
 
-import numpy as np
-
 from schemas import codec_json
 from schemas.codec_cdr import to_cdr
 from schemas.codec_png import encode_png_op
 from schemas.frames import fragments_json, publish_cbor, publish_cbor_raw, publish_json
+from schemas.message import payload_bytes
 from schemas.registry import TypeRegistry
 
 JSON = "none"
@@ -39,22 +38,6 @@ class WireFrame:
 
     data: bytes
     text: bool
-
-
-def payload_size(value: Any) -> int:
-    """Rough byte count of the bulk data in a canonical message (bytes and ndarrays).
-
-    Walks message structure only (dicts and lists of dicts), never array elements.
-    """
-    if isinstance(value, bytes | bytearray):
-        return len(value)
-    if isinstance(value, np.ndarray):
-        return int(value.nbytes)
-    if isinstance(value, dict):
-        return sum(payload_size(v) for v in value.values())
-    if isinstance(value, list) and value and isinstance(value[0], dict | bytes | np.ndarray):
-        return sum(payload_size(v) for v in value)
-    return 0
 
 
 class TopicMessage:
@@ -100,7 +83,7 @@ class TopicMessage:
         self.registry = registry
         self.cdr = cdr
         self.cdr_bytes = cdr_bytes
-        self.size_hint = payload_size(msg) if size_hint is None else size_hint
+        self.size_hint = payload_bytes(msg) if size_hint is None else size_hint
         self._frames: dict[tuple[str, str], WireFrame] = {}
         self._lock = threading.RLock()  # png re-enters for the JSON frame
 
@@ -161,7 +144,7 @@ class ControlMessage:
 
     @property
     def size_hint(self) -> int:
-        return payload_size(self.payload)
+        return payload_bytes(self.payload)
 
     @property
     def message_id(self) -> Any:

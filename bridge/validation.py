@@ -12,10 +12,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 
-from bridge.outgoing import payload_size
 from schemas.codec_cdr import cdr_size
 from schemas.errors import SchemaError
-from schemas.message import normalize
+from schemas.message import normalize, payload_bytes
 from schemas.registry import TypeRegistry
 from schemas.specs import MessageSpec
 from schemas.tracing import header_stamp_ns
@@ -57,7 +56,7 @@ def check_message(
         msg = normalize(spec, raw, now_ns=now_ns)
     except SchemaError as exc:
         return InvalidMessage(spec, str(exc))
-    return ValidMessage(spec, msg, max(wire_bytes, payload_size(msg)))
+    return ValidMessage(spec, msg, max(wire_bytes, payload_bytes(msg)))
 
 
 @dataclass(frozen=True, slots=True)

@@ -56,7 +56,8 @@ from clients.reader import FramePump
 from clients.services import Handler, ServiceHost, normalize_service_values
 from clients.subscription import DEFAULT_MAXSIZE, Subscription
 from clients.tracing import Tracer
-from clients.wire import Frame, payload_bytes
+from clients.wire import Frame
+from schemas.message import payload_bytes
 from schemas.registry import TypeRegistry
 
 logger = logging.getLogger(__name__)
@@ -419,7 +420,7 @@ class RosbridgeClient:
 
     async def _encode(self, topic: str, msg: dict[str, Any]) -> Frame:
         """Encode a publish, on the encode thread when its payload is large."""
-        if payload_bytes(msg) < self._offload_bytes:
+        if payload_bytes(msg, count_text=True) < self._offload_bytes:
             return self._protocol.encode_publish(topic, msg)
         loop = asyncio.get_running_loop()
         try:

@@ -1,45 +1,29 @@
-"""Stage tracing for client processes: record spans cheaply, publish them in small batches.
+"""Stage tracing for client processes: record spans cheaply, to be published in small batches.
 
 A :class:`Tracer` is handed to :class:`clients.RosbridgeClient` (``tracer=``), which records
 ``encode`` and ``send`` for every publish and ``decode`` for every received message that has a
 ``header.stamp``; the simulator and navigation record their own stages (``generate``,
-``wait``, ``process``...) into the same tracer. :func:`telemetry` publishes the spans on
-``/riverbridge/trace`` four times a second and the process's counters on
-``/riverbridge/process_stats`` once a second (docs/tracing.md). Recording costs a few
-``time.time_ns()`` calls and one tuple append; it never waits.
+``wait``, ``process``...) into the same tracer (``tracer.spans.record`` or
+:meth:`Tracer.processed`); :mod:`clients.node.telemetry` publishes
+them (docs/tracing.md). Recording costs a few ``time.time_ns()`` calls and one tuple append;
+it never waits.
 """
 
 from __future__ import annotations
 
-import asyncio
-import contextlib
-import logging
-import time
 from collections import OrderedDict
-from collections.abc import AsyncIterator, Callable, Sequence
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from clients.events import Received
-from schemas.runtime.telemetry import ResourceSampler, telemetry_ticks, this_process
+from schemas.runtime.telemetry import ResourceSampler, this_process
 from schemas.tracing import (
-    PUBLISH_PERIOD_S,
     SPAN_CAPACITY,
-    STATS_TOPIC,
-    STATS_TYPE,
-    TRACE_PERIOD_S,
-    TRACE_TOPIC,
-    TRACE_TYPE,
     SpanBuffer,
     header_stamp_ns,
     is_traced,
     process_stats_msg,
     span_array_msg,
 )
-
-if TYPE_CHECKING:
-    from clients.client import RosbridgeClient
-
-log = logging.getLogger(__name__)
 
 # Decode times remembered for `decoded_ns`: a second of every subscribed stamped topic.
 DECODED_MEMORY = 256
@@ -55,19 +39,6 @@ class Tracer:
         self._sampler = ResourceSampler()
         self._identity = this_process(process)
         self._decoded: OrderedDict[tuple[str, int], int] = OrderedDict()
-
-    def record(
-        self,
-        topic: str,
-        stamp_ns: int,
-        stage: str,
-        start_ns: int,
-        end_ns: int,
-        payload_bytes: int = 0,
-        wire_bytes: int = 0,
-    ) -> None:
-        """One stage of the message ``(topic, stamp_ns)``, wall-clock ns."""
-        self.spans.record(topic, stamp_ns, stage, start_ns, end_ns, payload_bytes, wire_bytes)
 
     def published(
         self,
@@ -141,56 +112,3 @@ class Tracer:
             self._sampler.rss_bytes(),
             {**self.counters, "dropped": dropped},
         )
-
-
-@contextlib.asynccontextmanager
-async def telemetry(
-    client: RosbridgeClient,
-    tracer: Tracer,
-    period_s: float = PUBLISH_PERIOD_S,
-    trace_period_s: float = TRACE_PERIOD_S,
-    dropped: Callable[[], int] | None = None,
-    also: Sequence[RosbridgeClient] = (),
-) -> AsyncIterator[None]:
-    """Publish ``tracer``'s span batches every ``trace_period_s`` and its stats every
-    ``period_s`` through ``client`` meanwhile.
-
-    ``also``: the process's other connections. Each announces the same ProcessStats, because
-    the bridge names a connection's fan-out spans by the process that announced itself on it
-    (the report counts each stats stamp once). ``dropped`` reports the process's
-    dropped-message count (default: all its clients' own). The last batch is published when
-    the block ends.
-    """
-    clients = (client, *also)
-    count_dropped = dropped or (lambda: sum(c.dropped for c in clients))
-    await client.advertise(TRACE_TOPIC, TRACE_TYPE)
-    for each in clients:
-        await each.advertise(STATS_TOPIC, STATS_TYPE)
-
-    async def publish_spans() -> None:
-        batch = tracer.batch_msg()
-        if batch is not None:
-            await client.publish(TRACE_TOPIC, batch)
-
-    async def publish_once() -> None:
-        await publish_spans()
-        stats = tracer.stats_msg(time.time_ns(), count_dropped())
-        for each in clients:
-            await each.publish(STATS_TOPIC, stats)
-
-    async def loop() -> None:
-        async for with_stats in telemetry_ticks(period_s, trace_period_s):
-            try:
-                await (publish_once() if with_stats else publish_spans())
-            except Exception:  # telemetry must never end the process it observes
-                log.exception("%s: publishing telemetry failed", tracer.process)
-
-    task = asyncio.create_task(loop(), name=f"{tracer.process} telemetry")
-    try:
-        yield
-    finally:
-        task.cancel()
-        with contextlib.suppress(asyncio.CancelledError):
-            await task
-        with contextlib.suppress(Exception):
-            await publish_once()

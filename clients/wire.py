@@ -16,8 +16,6 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, ParamSpec, cast
 
-import numpy as np
-
 from clients.errors import ProtocolError
 from schemas import codec_cbor, codec_json
 from schemas.codec_png import decode_png_data
@@ -89,23 +87,3 @@ def decode_frame(data: bytes | bytearray | memoryview | str) -> dict[str, Any]:
     if not isinstance(op, dict) or not isinstance(op.get("op"), str):
         raise ProtocolError(f"frame is not an op object: {str(op)[:80]!r}")
     return op
-
-
-def payload_bytes(value: Any) -> int:
-    """Rough size in bytes of the array payload of a message (bytes and ndarray fields).
-
-    Walks nested dicts and lists of dicts (fields, not elements of numeric arrays), so its
-    cost depends on the message's structure, never on the number of points it carries. Used
-    to decide whether encoding is worth moving off the event loop.
-    """
-    if isinstance(value, bytes | bytearray | memoryview):
-        return len(value)
-    if isinstance(value, np.ndarray):
-        return int(value.nbytes)
-    if isinstance(value, dict):
-        return sum(payload_bytes(item) for item in value.values())
-    if isinstance(value, list) and value and isinstance(value[0], dict | bytes | np.ndarray):
-        return sum(payload_bytes(item) for item in value)
-    if isinstance(value, str):
-        return len(value)
-    return 0

@@ -15,13 +15,13 @@ import asyncio
 import contextlib
 import logging
 import time
-from collections.abc import Awaitable, Callable
+from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from typing import Any
 
 from clients import RosbridgeClient, Subscription
+from clients.node.links import node_links
 from clients.protocol import Encoding
-from clients.stack.node_links import node_links
 from clients.tracing import Tracer
 from navigation.config import NavigationConfig
 from navigation.diagnostics import SensorCounters, diagnostic_array_msg
@@ -33,6 +33,7 @@ from navigation.processors import (
     Processors,
 )
 from schemas.catalogue import TOPICS, consumed_by, period_s
+from schemas.runtime.periodic import every
 from schemas.runtime.process import background_priority
 from schemas.tracing import header_stamp_ns
 
@@ -112,8 +113,8 @@ class NavigationNode:
         tasks = [asyncio.create_task(self._sensor_loop(name)) for name in SENSOR_INPUTS]
         tasks += [
             asyncio.create_task(self._imu_loop()),
-            asyncio.create_task(_every(map_period_s, self._publish_map)),
-            asyncio.create_task(_every(DIAGNOSTICS_PERIOD_S, self._publish_diagnostics)),
+            asyncio.create_task(every(map_period_s, self._publish_map, phase=1.0)),
+            asyncio.create_task(every(DIAGNOSTICS_PERIOD_S, self._publish_diagnostics, phase=1.0)),
         ]
         try:
             await stop.wait()
@@ -179,19 +180,6 @@ class NavigationNode:
             counters.skipped = self.subscriptions[name].dropped
         msg = diagnostic_array_msg(time.time_ns(), self.imu.snapshot(), self.counters)
         await self._client.publish(TOPIC_DIAGNOSTICS, msg)
-
-
-async def _every(period_s: float, action: Callable[[], Awaitable[None]]) -> None:
-    """Call ``action`` every ``period_s`` on a fixed schedule (no drift), until cancelled."""
-    loop = asyncio.get_running_loop()
-    next_s = loop.time()
-    while True:
-        next_s += period_s
-        await asyncio.sleep(max(0.0, next_s - loop.time()))
-        try:
-            await action()
-        except Exception:
-            log.exception("periodic %s failed", getattr(action, "__name__", action))
 
 
 async def serve(

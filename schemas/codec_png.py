@@ -4,21 +4,39 @@ The JSON text of a whole ``publish`` op (N bytes) is padded with ``\\n`` to
 ``width * height * 3`` bytes, where ``width = floor(sqrt(N / 3))`` and
 ``height = ceil((N / 3) / width)``, read row-major as an 8-bit RGB image, stored as PNG and
 sent base64-encoded in ``{"op":"png","data":...}``. OpenCV stores pixels as BGR, so the
-channel order is reversed on the way in and out.
+channel order is reversed on the way in and out. OpenCV is imported on first use: the light
+install (`pip install riverbridge`, no extras) has none, and then `png` is unavailable with an
+error that says how to get it (:func:`png_available` asks without raising).
 """
 
 from __future__ import annotations
 
 import binascii
+import functools
+import importlib
 import math
+from types import ModuleType
 
-import cv2
 import numpy as np
 import pybase64
 
 from schemas.errors import DecodeError, EncodeError
 
 _PAD = b"\n"
+PNG_NEEDS = "png compression needs OpenCV: pip install 'riverbridge[sim]' (or opencv-python)"
+
+
+@functools.cache
+def _opencv() -> ModuleType | None:
+    try:
+        return importlib.import_module("cv2")
+    except ImportError:
+        return None
+
+
+def png_available() -> bool:
+    """Whether OpenCV is installed, so that `png` frames can be made and read."""
+    return _opencv() is not None
 
 
 def png_shape(num_bytes: int) -> tuple[int, int]:
@@ -33,6 +51,9 @@ def encode_png_data(json_text: bytes) -> bytes:
     height, width = png_shape(len(json_text))
     padded = json_text.ljust(height * width * 3, _PAD)
     rgb = np.frombuffer(padded, dtype=np.uint8).reshape(height, width, 3)
+    cv2 = _opencv()
+    if cv2 is None:
+        raise EncodeError(PNG_NEEDS)
     ok, png = cv2.imencode(".png", np.ascontiguousarray(rgb[:, :, ::-1]))
     if not ok:
         raise EncodeError("OpenCV could not encode the PNG")
@@ -50,6 +71,9 @@ def decode_png_data(data_b64: str) -> bytes:
         png = pybase64.b64decode(data_b64, validate=True)
     except (binascii.Error, ValueError):
         raise DecodeError("png data is not base64") from None
+    cv2 = _opencv()
+    if cv2 is None:
+        raise DecodeError(PNG_NEEDS)
     image = cv2.imdecode(np.frombuffer(png, dtype=np.uint8), cv2.IMREAD_UNCHANGED)
     if image is None or image.ndim != 3 or image.shape[2] != 3:
         raise DecodeError("png data is not a 3-channel PNG image")

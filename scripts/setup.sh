@@ -4,7 +4,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-python3 -m pip install --quiet --disable-pip-version-check -e '.[test]'
+python3 -m pip install --quiet --disable-pip-version-check -e '.[all,test]'
 
 # Debian packages: Node.js for the roslibjs tests and the dashboard build, Chromium for the
 # dashboard's browser tests, docker-compose to validate and run docker-compose.yml, and the

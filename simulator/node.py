@@ -27,10 +27,11 @@ from concurrent.futures import ThreadPoolExecutor
 from typing import Any
 
 from clients import RosbridgeClient, Subscription
+from clients.node.links import node_links
 from clients.protocol import Encoding
-from clients.stack.node_links import node_links
 from clients.tracing import Tracer
 from schemas.catalogue import TOPICS, Topic, published_by
+from schemas.runtime.periodic import every
 from schemas.runtime.process import background_priority
 from simulator.config import SimConfig
 from simulator.dynamics import Command, StepResult, VesselDynamics, VesselState
@@ -60,6 +61,10 @@ class GenerationTimes:
     def record(self, ms: float) -> None:
         self.times_ms.append(ms)
         self.count += 1
+
+    def skip(self, ticks: int) -> None:
+        """The schedule fell `ticks` whole periods behind and dropped them."""
+        self.skipped += ticks
 
     def summary(self) -> str:
         if not self.times_ms:
@@ -136,20 +141,20 @@ class SimulatorNode:
         for k, sensor in enumerate(self._workers):
             tasks.append(
                 asyncio.create_task(
-                    _every(
+                    every(
                         1.0 / self.rate_hz(sensor),
                         self._worker_tick(sensor),
-                        self.timings[sensor.topic.key],
                         phase=k / len(self._workers),
+                        on_skipped=self.timings[sensor.topic.key].skip,
                     )
                 )
             )
         tasks += [
-            asyncio.create_task(_every(1.0 / self.rate_hz(sensor), self._timer_tick(sensor)))
+            asyncio.create_task(every(1.0 / self.rate_hz(sensor), self._timer_tick(sensor)))
             for sensor in self.sensors
             if sensor.schedule == "timer"
         ]
-        tasks.append(asyncio.create_task(_every(STATS_PERIOD_S, self._log_timings)))
+        tasks.append(asyncio.create_task(every(STATS_PERIOD_S, self._log_timings)))
         try:
             await stop.wait()
         finally:
@@ -276,7 +281,7 @@ class SimulatorNode:
     def _generated(self, topic: Topic, stamp_ns: int) -> None:
         """Trace `generate` of the thesis's sensors: capture (the stamp) -> message ready."""
         if self._tracer is not None and topic.thesis_sensor:
-            self._tracer.record(topic.name, stamp_ns, "generate", stamp_ns, self._clock_ns())
+            self._tracer.spans.record(topic.name, stamp_ns, "generate", stamp_ns, self._clock_ns())
 
     async def _log_timings(self) -> None:
         log.info(
@@ -285,34 +290,6 @@ class SimulatorNode:
             self.physics_lateness.summary(),
             self.collisions,
         )
-
-
-async def _every(
-    period_s: float,
-    action: Callable[[], Awaitable[None]],
-    times: GenerationTimes | None = None,
-    phase: float = 0.0,
-) -> None:
-    """Call `action` every `period_s` on a fixed schedule, the first call `phase` periods from
-    now. After an overrun the next tick starts at once (late, its own stamp), so a scan that
-    just misses its period costs no tick; only ticks a whole period behind are skipped (and
-    counted in `times.skipped`), never queued. Runs until cancelled."""
-    loop = asyncio.get_running_loop()
-    next_s = loop.time() + phase * period_s
-    await asyncio.sleep(phase * period_s)
-    while True:
-        try:
-            await action()
-        except Exception:  # one failed tick must not end the schedule
-            log.exception("periodic %s failed", getattr(action, "__qualname__", action))
-        next_s += period_s
-        behind = loop.time() - next_s
-        if behind >= period_s:
-            missed = int(behind / period_s)
-            next_s += missed * period_s
-            if times is not None:
-                times.skipped += missed
-        await asyncio.sleep(max(0.0, next_s - loop.time()))
 
 
 async def serve(

@@ -35,6 +35,16 @@ def repo_env(extra: Mapping[str, str] | None = None) -> dict[str, str]:
     return env
 
 
+def run_command(
+    argv: Sequence[str], timeout_s: float = 120.0, cwd: Path = REPO_ROOT
+) -> subprocess.CompletedProcess[str]:
+    """Run a command line to its end as a user would (from the checkout, with its environment),
+    its output kept as text for the test's assertions."""
+    return subprocess.run(
+        list(argv), cwd=cwd, env=repo_env(), capture_output=True, text=True, timeout=timeout_s
+    )
+
+
 def free_port() -> int:
     with socket.socket() as probe:
         probe.bind(("127.0.0.1", 0))

@@ -1,9 +1,10 @@
-"""Fixtures every test folder shares: the type registry and the canonical-message checker."""
+"""Fixtures every test folder shares: the type registry, the canonical-message checker, and
+this checkout first on every child process's PYTHONPATH."""
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from typing import Any
 
 import numpy as np
@@ -12,6 +13,8 @@ import pytest
 from schemas.codec_cdr import from_cdr, to_cdr
 from schemas.message import normalize
 from schemas.registry import TypeRegistry
+from tests.child_process import repo_env
+from tests.memory_pair import MemoryPair
 
 
 def assert_same(expected: Any, actual: Any, path: str = "msg") -> None:
@@ -54,3 +57,19 @@ def check_canonical(registry: TypeRegistry) -> Callable[[str, dict], None]:
         assert_same(msg, from_cdr(registry, type_name, to_cdr(registry, type_name, msg)))
 
     return check
+
+
+@pytest.fixture(scope="session", autouse=True)
+def children_import_this_checkout() -> Iterator[None]:
+    """pytest puts the checkout first on its own sys.path (pyproject `pythonpath`); a child
+    process (`python -m bridge`, `riverbridge.py`) started without an explicit environment must
+    import the same copy, not an installed one, so PYTHONPATH names it first for the session."""
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setenv("PYTHONPATH", repo_env()["PYTHONPATH"])
+        yield
+
+
+@pytest.fixture
+def memory_pair(registry: TypeRegistry) -> MemoryPair:
+    """The client library's protocol and the bridge's core, talking in memory (no sockets)."""
+    return MemoryPair(registry)

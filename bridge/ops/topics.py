@@ -2,15 +2,18 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 from bridge.context import Context
 from bridge.errors import GraphConflictError, OpFailure
 from bridge.graph import TopicEntry
 from bridge.names import absolute_name, allowed
 from bridge.ops import Route, route
-from bridge.outgoing import MIN_FRAGMENT_SIZE, TopicMessage
-from bridge.session import ClientSession
+from bridge.outgoing import JSON, MIN_FRAGMENT_SIZE, PNG, TopicMessage
+from bridge.session import ClientSession, StatusLevel
 from bridge.subscription import SubscribeSettings, Subscription
 from bridge.validation import CheckedMessage, InvalidMessage, check_message
+from schemas.codec_png import PNG_NEEDS, png_available
 from schemas.errors import SchemaError
 from schemas.ops import (
     Advertise,
@@ -137,7 +140,11 @@ def handle_subscribe(ctx: Context, session: ClientSession, op: Subscribe) -> Non
         ctx.state.topic_subscriptions.setdefault(name, {})[session.client_id] = subscription
         graph.add_subscriber(name, session.node)
     subscription.spelling = op.topic
-    subscription.set_id(op.id, subscribe_settings(op))
+    settings = subscribe_settings(op)
+    if settings.compression == PNG and not png_available():
+        ctx.problem(session, "subscribe", op.id, f"{PNG_NEEDS}; sending JSON", StatusLevel.WARNING)
+        settings = replace(settings, compression=JSON)
+    subscription.set_id(op.id, settings)
     if is_new and entry.latched is not None:
         ctx.release(session, subscription, subscription.offer(entry.latched, ctx.now_ns))
     else:

@@ -16,7 +16,7 @@ import sys
 from collections.abc import AsyncIterator, Sequence
 from pathlib import Path
 
-from clients.stack.child import BRIDGE_URL, Component
+from clients.node.child import BRIDGE_URL, Component
 
 log = logging.getLogger(__name__)
 

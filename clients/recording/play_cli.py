@@ -22,10 +22,10 @@ from mcap.exceptions import McapError
 from mcap.reader import SeekingReader
 
 from clients.errors import ConnectionFailed
+from clients.node.cli import add_client_arguments, non_negative_seconds, run_until_stopped
 from clients.recording.player import STAMP_MODES, Player, PlayStats
 from clients.recording.record_cli import topic_pattern, ws_url
 from clients.recording.topics import BRIDGE_OWNED, TopicFilter
-from clients.stack.node_cli import add_client_arguments, non_negative_seconds, run_until_stopped
 
 log = logging.getLogger("clients.recording")
 

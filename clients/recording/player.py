@@ -19,7 +19,7 @@ Decoding CDR into the canonical form (rosbags) runs on a worker thread ahead of 
 a type the local registry does not know is registered from the recording's own definition.
 Each topic has its own sender task, so a 5 MB scan being encoded and sent never delays the
 IMU samples scheduled behind it; small topics go over the process's realtime connection and
-large ones over the bulk connection (:mod:`clients.stack.node_links`).
+large ones over the bulk connection (:mod:`clients.node.links`).
 """
 
 from __future__ import annotations
@@ -39,9 +39,9 @@ from rosbags.typesys import get_types_from_msg
 from rosbags.typesys.base import TypesysError
 
 from clients.client import RosbridgeClient
+from clients.node.links import node_links
 from clients.recording.reading import RecordedMessage, read_recording
 from clients.recording.topics import BRIDGE_OWNED, TopicFilter
-from clients.stack.node_links import node_links
 from schemas.catalogue import published_by
 from schemas.codec_cdr import from_cdr
 from schemas.errors import SchemaError

@@ -18,10 +18,10 @@ import sys
 from pathlib import Path
 
 from clients.errors import ConnectionFailed
+from clients.node.cli import add_client_arguments, non_negative_seconds, run_until_stopped
 from clients.recording.mcap_file import COMPRESSIONS, TopicCounts
 from clients.recording.recorder import Recorder
 from clients.recording.topics import TopicFilter, check_patterns
-from clients.stack.node_cli import add_client_arguments, non_negative_seconds, run_until_stopped
 
 log = logging.getLogger("clients.recording")
 

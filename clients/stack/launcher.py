@@ -1,7 +1,7 @@
 """Supervise the bridge, the simulator and the navigation service as three local processes.
 
 Design (asyncio subprocesses, one event loop, no threads of our own; one child's process in
-:mod:`clients.stack.child`, the shared output in :mod:`clients.stack.output`):
+:mod:`clients.node.child`, the shared output in :mod:`clients.node.output`):
 
 - Each component runs as ``sys.executable -m <package> ...`` in its own process group
   (``process_group=0``), so a terminal's Ctrl-C reaches only the supervisor, which then stops
@@ -44,9 +44,9 @@ from pydantic import BaseModel, ConfigDict, Field, SecretStr
 from clients.client import RosbridgeClient
 from clients.connection import AUTH_SECRET_ENV, TransportConfig
 from clients.errors import RosbridgeError
-from clients.stack.child import BRIDGE_URL, Child, Component, describe_exit
+from clients.node.child import BRIDGE_URL, Child, Component, describe_exit
+from clients.node.output import PrefixedOutput
 from clients.stack.healthcheck import Unhealthy, fetch_version, missing_publishers
-from clients.stack.output import PrefixedOutput
 from clients.stack.restarts import RestartBackoff, RestartLedger, RestartMode, RestartPolicy
 from schemas.catalogue import streams_of
 from schemas.rosauth import read_secret

@@ -16,11 +16,11 @@ import signal
 import sys
 from pathlib import Path
 
+from clients.node.child import Component
+from clients.node.output import PrefixedLogHandler, PrefixedOutput
 from clients.recording.components import recorder_component
 from clients.recording.record_cli import output_file
-from clients.stack.child import Component
 from clients.stack.launcher import LaunchConfig, Supervisor, stack_components
-from clients.stack.output import PrefixedLogHandler, PrefixedOutput
 from clients.stack.restarts import RESTART_MODES
 from schemas.bridge_config import GROUPS, BridgeConfig
 from schemas.options import add_options, passed_through, spelled

@@ -64,7 +64,7 @@ def single_threaded_blas() -> None:
     Our own threads already split the heavy work across the 2 cores. OpenBLAS's worker threads
     spin for a while after every call, even a 3-column matmul, and take those cores from Embree
     and the event loops: rotating the LIDAR rays just before a scan made its ray cast take 36
-    instead of 19 ms. `python benchmarks/simulator.py --quick`: LIDAR scan median 32 -> 25.5 ms,
+    instead of 19 ms. `python -m benchmarks.simulator --quick`: LIDAR scan median 32 -> 25.5 ms,
     camera frame 43.5 -> 32 ms. The single-threaded matmul of 345,600 rays costs 0.4 ms more.
     """
     threadpool_limits(limits=1, user_api="blas")

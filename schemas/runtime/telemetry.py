@@ -2,12 +2,12 @@
 
 from __future__ import annotations
 
-import asyncio
 import os
 import socket
 import time
 from collections.abc import AsyncIterator
 
+from schemas.runtime.periodic import ticks
 from schemas.tracing import PUBLISH_PERIOD_S, TRACE_PERIOD_S, ProcessIdentity
 
 
@@ -50,11 +50,11 @@ async def telemetry_ticks(
     period_s: float = PUBLISH_PERIOD_S, trace_period_s: float = TRACE_PERIOD_S
 ) -> AsyncIterator[bool]:
     """Wake every `trace_period_s` (span batches) and say whether stats are due as well (every
-    `period_s`); runs until cancelled. The bridge and the client processes share the rhythm."""
+    `period_s`, also when the tick that was due was skipped); runs until cancelled. The bridge
+    and the client processes share the rhythm, on the one schedule (:mod:`.periodic`)."""
     step_s = min(trace_period_s, period_s)
     ticks_per_stats = max(1, round(period_s / step_s))
     tick = 0
-    while True:
-        await asyncio.sleep(step_s)
-        tick += 1
-        yield tick % ticks_per_stats == 0
+    async for skipped in ticks(step_s, phase=1.0):
+        before, tick = tick, tick + 1 + skipped
+        yield tick // ticks_per_stats > before // ticks_per_stats

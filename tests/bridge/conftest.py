@@ -3,9 +3,9 @@
 from __future__ import annotations
 
 import pytest
-from bridge_harness import CoreHarness
 
 from schemas.registry import TypeRegistry
+from tests.bridge.bridge_harness import CoreHarness
 
 
 @pytest.fixture

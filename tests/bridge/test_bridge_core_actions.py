@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from bridge_harness import CoreHarness
+from tests.bridge.bridge_harness import CoreHarness
 
 FIB = "example_interfaces/action/Fibonacci"
 

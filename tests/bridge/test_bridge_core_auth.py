@@ -3,9 +3,9 @@
 from __future__ import annotations
 
 import pytest
-from bridge_harness import START_NS, CoreHarness
 
 from schemas import rosauth
+from tests.bridge.bridge_harness import START_NS, CoreHarness
 
 SECRET = "1234567890abcdef"  # rosauth's secrets are 16 characters
 NOW_S = START_NS // 1_000_000_000

@@ -35,7 +35,7 @@ def test_out_of_order_fragments_with_float_total_form_any_op(harness):
 
 
 def test_incomplete_fragments_expire(registry):
-    from bridge_harness import CoreHarness
+    from tests.bridge.bridge_harness import CoreHarness
 
     harness = CoreHarness(registry, fragment_timeout_s=2.0)
     caller = harness.connect()
@@ -59,7 +59,7 @@ def test_fragments_with_conflicting_totals_or_bad_numbers_are_refused(harness):
 
 
 def test_fragments_beyond_the_size_limit_close_the_client_with_1009(registry):
-    from bridge_harness import CoreHarness
+    from tests.bridge.bridge_harness import CoreHarness
 
     harness = CoreHarness(registry, max_message_size=100)
     client, other = harness.connect(), harness.connect()

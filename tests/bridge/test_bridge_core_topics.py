@@ -5,10 +5,10 @@ from __future__ import annotations
 from dataclasses import replace
 
 import numpy as np
-from bridge_harness import CoreHarness
 
 from bridge.outgoing import MIN_FRAGMENT_SIZE
 from schemas.codec_cdr import from_cdr
+from tests.bridge.bridge_harness import CoreHarness
 
 
 def advertise(

@@ -10,12 +10,12 @@ import logging
 
 import cbor2
 import pytest
-from bridge_harness import CoreHarness
 
 from bridge.effects import Close
 from bridge.outgoing import render
 from bridge.problems import LINES_PER_WINDOW, WINDOW_S
 from schemas.ops import MAX_ID_CHARS
+from tests.bridge.bridge_harness import CoreHarness
 
 
 @pytest.fixture
@@ -193,7 +193,7 @@ def test_a_bug_in_a_handler_costs_one_op_not_the_connection(harness, caplog_core
 
 
 def test_every_answer_to_hostile_frames_can_be_encoded(harness):
-    from hostile_frames import HostileFrames
+    from tests.bridge.hostile_frames import HostileFrames
 
     clients = [harness.connect() for _ in range(3)]
     frames = HostileFrames(seed=7)

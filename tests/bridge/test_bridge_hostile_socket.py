@@ -19,12 +19,12 @@ import urllib.request
 
 import pytest
 import websockets
-from child_process import running
-from hostile_frames import HostileFrames
 from websockets.exceptions import ConnectionClosed
 
 from bridge.compose import run_bridge
 from bridge.config import BridgeConfig
+from tests.bridge.hostile_frames import HostileFrames
+from tests.child_process import running
 
 pytestmark = [pytest.mark.timeout(120), pytest.mark.slow]
 

@@ -3,10 +3,10 @@
 from __future__ import annotations
 
 import pytest
-from bridge_harness import CoreHarness
 
 from bridge.errors import InvalidNameError
 from bridge.names import MAX_NAME_CHARS, absolute_name
+from tests.bridge.bridge_harness import CoreHarness
 
 
 @pytest.mark.parametrize(

@@ -14,7 +14,6 @@ from collections.abc import Iterator
 
 import cbor2
 import pytest
-from bridge_harness import CoreHarness
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from websockets.sync.client import connect
@@ -23,6 +22,7 @@ from bridge.compose import run_bridge
 from bridge.config import BridgeConfig
 from bridge.outgoing import render
 from schemas import codec_cbor
+from tests.bridge.bridge_harness import CoreHarness
 
 VALID_OPS = [
     {"op": "advertise", "topic": "/a", "type": "std_msgs/String", "id": "ad", "latch": True},

@@ -13,9 +13,9 @@ import hashlib
 from collections.abc import Callable
 
 import pytest
-from bridge_harness import CoreHarness
 
 from schemas.registry import TypeRegistry
+from tests.bridge.bridge_harness import CoreHarness
 
 FIB = "example_interfaces/action/Fibonacci"
 

@@ -5,7 +5,6 @@ from __future__ import annotations
 import numpy as np
 import orjson
 import pytest
-from client_messages import publish_text, rosbridge_fragments, rosbridge_png
 from hypothesis import given
 from hypothesis import strategies as st
 
@@ -15,6 +14,7 @@ from clients.fragments import FragmentAssembler
 from clients.protocol import ClientProtocol
 from schemas.ops import Fragment, validate_op
 from schemas.registry import TypeRegistry
+from tests.clients.client_messages import publish_text, rosbridge_fragments, rosbridge_png
 
 
 def fragment(frame: str) -> Fragment:

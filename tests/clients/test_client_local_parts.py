@@ -15,7 +15,7 @@ from clients.errors import ClientClosed, ConnectionClosed
 from clients.events import Received
 from clients.publisher import TopicPublisher
 from clients.subscription import Subscription, bytes_as_arrays
-from clients.wire import Frame, payload_bytes
+from clients.wire import Frame
 
 
 def test_backoff_grows_to_the_cap_with_jitter_inside_bounds():
@@ -122,17 +122,6 @@ def test_bytes_as_arrays_gives_zero_copy_views():
     assert out["markers"][0]["blob"].tolist() == [1]
     assert out["header"] == {"frame_id": "x"} and out["n"] == 3
     assert isinstance(msg["data"], bytes), "the original message is untouched"
-
-
-def test_payload_bytes_counts_arrays_not_structure():
-    msg = {
-        "data": b"x" * 1000,
-        "points": np.zeros((10, 4), np.float32),
-        "header": {"frame_id": "abc"},
-        "covariance": [0.0] * 9,
-        "markers": [{"blob": b"y" * 5}],
-    }
-    assert payload_bytes(msg) == 1000 + 160 + 3 + 5
 
 
 class SlowLink:

@@ -6,9 +6,9 @@ import asyncio
 
 import numpy as np
 import pytest
-from client_messages import imu, pointcloud, publish_until_received
 
 from clients import ConnectionClosed, ConnectionFailed, RosbridgeClient
+from tests.clients.client_messages import imu, pointcloud, publish_until_received
 
 ENCODINGS = ["json", "cbor"]
 

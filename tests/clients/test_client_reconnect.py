@@ -6,11 +6,11 @@ import asyncio
 from urllib.parse import urlsplit
 
 import pytest
-from client_messages import publish_until_received
 
 from bridge.compose import run_bridge
 from bridge.config import BridgeConfig
 from clients import ClientClosed, RosbridgeClient
+from tests.clients.client_messages import publish_until_received
 
 ADD = "example_interfaces/srv/AddTwoInts"
 

@@ -11,9 +11,14 @@ import base64
 
 import orjson
 import websockets
-from client_messages import pointcloud, publish_text, rosbridge_fragments, rosbridge_png
 
 from clients import RosbridgeClient
+from tests.clients.client_messages import (
+    pointcloud,
+    publish_text,
+    rosbridge_fragments,
+    rosbridge_png,
+)
 
 
 class ScriptedServer:

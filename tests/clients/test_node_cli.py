@@ -2,12 +2,11 @@
 
 from __future__ import annotations
 
-from collections.abc import Callable
-
 import pytest
 
 from navigation import cli as nav_cli
 from simulator import cli as sim_cli
+from tests.cli_checks import assert_refused
 
 MAINS = {"simulator": sim_cli.main, "navigation": nav_cli.main}
 
@@ -25,8 +24,4 @@ MAINS = {"simulator": sim_cli.main, "navigation": nav_cli.main}
 def test_a_bad_shared_option_is_named(
     node: str, argv: list[str], option: str, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    main: Callable[[list[str]], int] = MAINS[node]
-    with pytest.raises(SystemExit) as exit_info:
-        main(argv)
-    assert exit_info.value.code == 2
-    assert option in capsys.readouterr().err
+    assert_refused(MAINS[node], argv, option, capsys)

@@ -14,10 +14,10 @@ from pathlib import Path
 import pytest
 import roslibpy
 import websockets
-from tls_certificates import CertificatePair, make_certificate
 from websockets.exceptions import InvalidStatus
 
 from schemas import rosauth
+from tests.tls_certificates import CertificatePair, make_certificate
 
 from . import roslibpy_support as rp
 from .bridge_process import BridgeEndpoint, running_bridge

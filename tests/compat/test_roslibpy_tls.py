@@ -10,7 +10,8 @@ from __future__ import annotations
 import time
 
 import roslibpy
-from tls_certificates import make_certificate
+
+from tests.tls_certificates import make_certificate
 
 from . import roslibpy_support as rp
 from .bridge_process import running_bridge

@@ -3,16 +3,15 @@ values named on exit, and a domain that cannot be joined."""
 
 from __future__ import annotations
 
-import subprocess
 import sys
 import xml.etree.ElementTree as ET
 
 import pytest
-from child_process import REPO_ROOT, repo_env
 
 from bridge import cli
 from clients.stack import up_cli
 from clients.stack.launcher import stack_components
+from tests.child_process import run_command
 
 
 def bridge_config(argv: list[str]):
@@ -91,7 +90,7 @@ def test_print_dds_config_gives_the_xml_for_ros2_nodes(capsys):
 
 @pytest.mark.slow
 def test_a_domain_that_cannot_be_joined_exits_1_with_the_reason(dds_domain):
-    result = subprocess.run(
+    result = run_command(
         [
             sys.executable,
             "-m",
@@ -103,12 +102,7 @@ def test_a_domain_that_cannot_be_joined_exits_1_with_the_reason(dds_domain):
             str(dds_domain),
             "--dds-interface",
             "nosuch0",
-        ],
-        cwd=REPO_ROOT,
-        env=repo_env(),
-        capture_output=True,
-        text=True,
-        timeout=120,
+        ]
     )
     assert result.returncode == 1
     assert "cannot join DDS domain" in result.stderr and "nosuch0" in result.stderr

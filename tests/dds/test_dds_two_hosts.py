@@ -15,9 +15,10 @@ import sys
 from pathlib import Path
 
 import pytest
-from child_process import running
-from compat.node_runner import JS_DIR, node_executable
-from dds_netns import Host, two_hosts, why_not
+
+from tests.child_process import running
+from tests.compat.node_runner import JS_DIR, node_executable
+from tests.dds.dds_netns import Host, two_hosts, why_not
 
 pytestmark = pytest.mark.slow
 

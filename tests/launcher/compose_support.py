@@ -14,7 +14,7 @@ from typing import Any
 
 import yaml
 
-from .processes import REPO_ROOT
+from tests.child_process import REPO_ROOT
 
 COMPOSE_FILE = REPO_ROOT / "docker-compose.yml"
 HOST_COMPOSE_FILE = REPO_ROOT / "docker-compose.host.yml"
@@ -72,10 +72,12 @@ def dockerfile_stages() -> dict[str, list[str]]:
 
 
 def dockerfile_copies() -> list[str]:
-    """Sources of the ``COPY`` lines of the ``install`` stage that feed ``pip install .``
-    (not the build configuration, which goes to an absolute path)."""
+    """Sources of the ``COPY`` lines of the ``install`` stage and the ``install-bridge`` stage
+    it builds on, which feed ``pip install .`` (not the build configuration, which goes to an
+    absolute path)."""
     sources: list[str] = []
-    for line in dockerfile_stages()["install"]:
+    stages = dockerfile_stages()
+    for line in [*stages["install-bridge"], *stages["install"]]:
         if line.startswith("COPY ") and "--from=" not in line:
             *parts, destination = shlex.split(line[5:])
             if not destination.startswith("/"):

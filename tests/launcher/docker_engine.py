@@ -24,7 +24,7 @@ import time
 from collections.abc import Iterator
 from pathlib import Path
 
-from .processes import REPO_ROOT
+from tests.child_process import REPO_ROOT
 
 BASE_IMAGE = "riverbridge-base:local"
 NODE_IMAGE = "riverbridge-node:local"

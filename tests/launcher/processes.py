@@ -13,15 +13,7 @@ import sys
 import time
 from collections.abc import Sequence
 
-from child_process import (  # noqa: F401  (re-exported for the launcher tests)
-    REPO_ROOT,
-    STARTUP_TIMEOUT_S,
-    STOP_TIMEOUT_S,
-    Running,
-    free_port,
-    pid_alive,
-    repo_env,
-)
+from tests.child_process import STARTUP_TIMEOUT_S, Running, pid_alive
 
 _STARTED = re.compile(r"\[up\]\s+started (?P<title>\w+) \(pid (?P<pid>\d+)\)")
 _CONNECT = re.compile(r"connect to (?P<url>wss?://(?P<host>[\d.]+):(?P<port>\d+))")

@@ -25,6 +25,7 @@ from clients.stack.launcher import (
     LaunchConfig,
     stack_components,
 )
+from tests.child_process import Running, free_port
 
 from .compose_support import (
     COMPOSE_FILE,
@@ -37,7 +38,6 @@ from .compose_support import (
     localize,
     service_env,
 )
-from .processes import Running, free_port
 
 DEFAULTS = load_compose()
 SERVICES = DEFAULTS["services"]
@@ -147,7 +147,7 @@ def test_image_serves_the_dashboard_as_a_user_without_the_build_settings() -> No
     assert dockerfile_env()["RIVERBRIDGE_WEB_ROOT"] == "/opt/riverbridge/web"
     assert any(line.startswith("USER ") and line.split()[1] != "root" for line in image)
     assert image[-1].startswith("CMD ")
-    for stage in ("dashboard", "install"):
+    for stage in ("dashboard", "install-bridge"):
         assert "COPY docker/build-config/ /build-config/" in dockerfile_stages()[stage]
 
 
@@ -268,3 +268,21 @@ def test_localize_swaps_service_names_ports_and_config(tmp_path: Path) -> None:
     ]
     bridge = ["python", "-m", "bridge", "--host", "0.0.0.0", "--port", "9090"]
     assert localize(bridge, 4242, tmp_path)[3:] == ["--host", "127.0.0.1", "--port", "4242"]
+
+
+def test_the_bridge_target_is_the_light_install_with_the_dashboard() -> None:
+    """`docker build --target bridge`: the venv of the stage that installs only the base
+    dependencies and schemas, bridge and clients, the dashboard, a non-root user."""
+    stages = dockerfile_stages()
+    install = stages["install-bridge"]
+    assert "python3 requirements.py > requirements.txt" in " ".join(install)
+    copied = {line.split()[1] for line in install if line.startswith("COPY ")}
+    assert not copied & {"simulator", "navigation"}, copied
+    bridge = stages["bridge"]
+    assert bridge[0] == "FROM runtime AS bridge"
+    assert [line for line in bridge if line.startswith("COPY ")] == [
+        "COPY --from=install-bridge /opt/riverbridge /opt/riverbridge",
+        "COPY --from=dashboard /web/dist /opt/riverbridge/web",
+    ]
+    assert any(line.startswith("USER ") and line.split()[1] != "root" for line in bridge)
+    assert bridge[-1] == stages[""][-1], "both images start the bridge the same way"

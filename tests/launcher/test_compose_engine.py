@@ -22,6 +22,8 @@ from pathlib import Path
 
 import pytest
 
+from tests.child_process import REPO_ROOT, free_port, run_command
+
 from .docker_engine import (
     EngineUnavailable,
     build_bases,
@@ -30,7 +32,6 @@ from .docker_engine import (
     make_context,
     run,
 )
-from .processes import REPO_ROOT, free_port, repo_env
 
 pytestmark = pytest.mark.slow
 
@@ -100,7 +101,8 @@ def receive_with_roslibpy(
 ) -> dict[str, dict]:
     """One message of each topic through the real roslibpy client."""
     import roslibpy
-    from compat.roslibpy_support import close, connect
+
+    from tests.compat.roslibpy_support import close, connect
 
     received: dict[str, dict] = {}
     done = threading.Event()
@@ -202,7 +204,7 @@ def test_compose_up_builds_runs_and_serves_the_stack(engine: None, tmp_path: Pat
         assert set(received) == {"/imu/data", "/nav/boxes"}, received.keys()
         assert received["/imu/data"]["header"]["frame_id"]
         mark = time.monotonic()
-        report = subprocess.run(
+        report = run_command(
             [
                 sys.executable,
                 str(REPO_ROOT / "riverbridge.py"),
@@ -212,11 +214,7 @@ def test_compose_up_builds_runs_and_serves_the_stack(engine: None, tmp_path: Pat
                 "--duration",
                 "10",
             ],
-            cwd=REPO_ROOT,
-            env=repo_env(),
-            capture_output=True,
-            text=True,
-            timeout=300,
+            timeout_s=300,
         )
         timings["report"] = time.monotonic() - mark
         assert report.returncode == 0, report.stdout + report.stderr

@@ -15,8 +15,9 @@ from pathlib import Path
 
 import pytest
 
+from tests.child_process import REPO_ROOT, Running
+
 from .compose_support import dockerfile_copies, dockerignore_patterns
-from .processes import REPO_ROOT, Running
 
 pytestmark = pytest.mark.slow
 

@@ -9,7 +9,8 @@ from pathlib import Path
 
 import pytest
 
-from .processes import REPO_ROOT
+from tests.child_process import REPO_ROOT
+
 from .test_up_stack import running_up
 
 pytestmark = pytest.mark.slow

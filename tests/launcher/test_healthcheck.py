@@ -10,8 +10,7 @@ import pytest
 
 from clients import RosbridgeClient
 from clients.stack.healthcheck import Unhealthy, check
-
-from .processes import REPO_ROOT, Running, free_port, repo_env
+from tests.child_process import Running, free_port, run_command
 
 pytestmark = pytest.mark.slow
 
@@ -30,14 +29,7 @@ def bridge_url() -> Iterator[str]:
 
 
 def healthcheck(*args: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run(
-        [sys.executable, "-m", "clients.stack.healthcheck", *args],
-        cwd=REPO_ROOT,
-        env=repo_env(),
-        capture_output=True,
-        text=True,
-        timeout=120,
-    )
+    return run_command([sys.executable, "-m", "clients.stack.healthcheck", *args])
 
 
 def test_a_listening_bridge_is_healthy(bridge_url: str) -> None:

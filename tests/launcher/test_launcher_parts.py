@@ -9,7 +9,8 @@ from pathlib import Path
 
 import pytest
 
-from clients.stack.child import BRIDGE_URL, describe_exit
+from clients.node.child import BRIDGE_URL, describe_exit
+from clients.node.output import PrefixedOutput
 from clients.stack.healthcheck import version_url
 from clients.stack.launcher import (
     NAVIGATION_TOPICS,
@@ -20,7 +21,6 @@ from clients.stack.launcher import (
     stack_components,
     ws_url,
 )
-from clients.stack.output import PrefixedOutput
 
 
 def test_stack_is_bridge_then_simulator_then_navigation_with_their_options() -> None:

@@ -21,11 +21,12 @@ from dataclasses import replace
 import pytest
 
 from clients import RosbridgeClient
-from clients.stack.child import Component
+from clients.node.child import Component
+from clients.node.output import PrefixedLogHandler, PrefixedOutput
 from clients.stack.launcher import LaunchConfig, Supervisor, stack_components
-from clients.stack.output import PrefixedLogHandler, PrefixedOutput
+from tests.child_process import repo_env
 
-from .processes import kill_leftovers, repo_env, wait_gone
+from .processes import kill_leftovers, wait_gone
 
 pytestmark = pytest.mark.slow
 

@@ -2,15 +2,14 @@
 
 from __future__ import annotations
 
-import subprocess
 import sys
 
 import pytest
 
 from clients.stack import up_cli
 from clients.stack.launcher import LaunchConfig
-
-from .processes import REPO_ROOT, repo_env
+from tests.child_process import run_command
+from tests.cli_checks import assert_refused
 
 
 @pytest.mark.parametrize(
@@ -35,21 +34,13 @@ from .processes import REPO_ROOT, repo_env
 def test_bad_option_exits_2_naming_it(
     argv: list[str], option: str, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    with pytest.raises(SystemExit) as exited:
-        up_cli.main(argv)
-    assert exited.value.code == 2
-    assert option in capsys.readouterr().err
+    assert_refused(up_cli.main, argv, option, capsys)
 
 
 def test_missing_config_file_through_the_real_command_line() -> None:
     """Started as users start it; nothing is launched, the message names option and file."""
-    result = subprocess.run(
-        [sys.executable, "-m", "clients.stack.up_cli", "--nav-config", "missing-nav.toml"],
-        cwd=REPO_ROOT,
-        env=repo_env(),
-        capture_output=True,
-        text=True,
-        timeout=120,
+    result = run_command(
+        [sys.executable, "-m", "clients.stack.up_cli", "--nav-config", "missing-nav.toml"]
     )
     assert result.returncode == 2
     assert "--nav-config" in result.stderr and "missing-nav.toml" in result.stderr

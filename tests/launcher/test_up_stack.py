@@ -16,12 +16,12 @@ from typing import Any
 import pytest
 import roslibpy
 from pydantic import SecretStr
-from tls_certificates import make_certificate
 
 from clients import RosbridgeClient
 from clients.connection import TransportConfig
 from clients.errors import ServiceError
 from clients.stack.launcher import NAVIGATION_TOPICS, SIMULATOR_TOPICS
+from tests.tls_certificates import make_certificate
 
 from .processes import UpProcess, kill_leftovers, wait_gone
 

@@ -8,8 +8,12 @@ surface it hit, so tests know the truth per point.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
+import cv2
 import numpy as np
+
+from navigation.messages import header_msg
 
 WATER = -1  # surface ids below zero are background
 BANK = -2
@@ -127,3 +131,46 @@ def radar_noise_image(
     """Square-law detected Rayleigh clutter: exponential power, (beams, cells) float32."""
     rng = np.random.default_rng(seed)
     return rng.exponential(mean_power, size=(n_beams, n_cells)).astype(np.float32)
+
+
+def radar_image_msg(
+    stamp_ns: int, n_cells: int, range_step_m: float, target_cell: int
+) -> dict[str, Any]:
+    """A RadarImage of 72 beams of 5 deg: clutter (`radar_noise_image`, seed 1) with one strong
+    return (power 500) at beam 18 (90 deg), cell `target_cell`."""
+    power = radar_noise_image(72, n_cells, 1.0, seed=1)
+    power[18, target_cell] = 500.0
+    return {
+        "header": header_msg(stamp_ns, "radar"),
+        "azimuth_min_rad": 0.0,
+        "azimuth_step_rad": float(np.float32(np.deg2rad(5.0))),
+        "beam_width_azimuth_rad": float(np.float32(np.deg2rad(5.0))),
+        "beam_width_elevation_rad": float(np.float32(np.deg2rad(15.0))),
+        "range_min_m": 0.0,
+        "range_step_m": range_step_m,
+        "num_beams": 72,
+        "num_cells": n_cells,
+        "reflectance": power.reshape(-1),
+    }
+
+
+def camera_line_msg(stamp_ns: int, width_px: int, height_px: int) -> dict[str, Any]:
+    """A CompressedImage (JPEG) of a dark frame crossed by one white horizontal line, 5/8 down."""
+    image = np.full((height_px, width_px, 3), 30, np.uint8)
+    row = height_px * 5 // 8
+    cv2.line(image, (0, row), (width_px - 1, row), (255, 255, 255), 3)
+    jpeg = cv2.imencode(".jpg", image)[1].tobytes()
+    return {"header": header_msg(stamp_ns, "camera"), "format": "jpeg", "data": jpeg}
+
+
+def imu_msg(stamp_ns: int) -> dict[str, Any]:
+    """An Imu at rest and level, turning slowly (0.01 rad/s yaw)."""
+    return {
+        "header": header_msg(stamp_ns, "imu"),
+        "orientation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0},
+        "orientation_covariance": [0.0] * 9,
+        "angular_velocity": {"x": 0.0, "y": 0.0, "z": 0.01},
+        "angular_velocity_covariance": [0.0] * 9,
+        "linear_acceleration": {"x": 0.0, "y": 0.0, "z": 9.81},
+        "linear_acceleration_covariance": [0.0] * 9,
+    }

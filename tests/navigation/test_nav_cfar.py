@@ -6,11 +6,11 @@ from __future__ import annotations
 import numpy as np
 import pydantic
 import pytest
-from nav_scenes import radar_noise_image
 
 from navigation.cfar import CfarDetector, CfarWindowError, ring_side_sums, side_sums
 from navigation.cfar_pfa import ca_factor, ca_pfa, goca_pfa, os_pfa, soca_pfa
 from navigation.config import CfarConfig
+from tests.navigation.nav_scenes import radar_noise_image
 
 DETECTORS = ["ca", "soca", "goca", "os"]
 BEAMS, CELLS = 72, 800  # a long-range radar image: 72 beams x 800 range cells

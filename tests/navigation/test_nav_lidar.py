@@ -4,13 +4,21 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from nav_scenes import BANK, NOISE, WATER, default_scene, lidar_directions, raycast, with_noise
 
 from navigation.config import GroundConfig, LidarConfig
 from navigation.lidar import obstacle_points, process_scan
 from navigation.lidar_filter import estimate_water_level, range_mask, voxel_downsample
 from navigation.lidar_messages import box_array_msg, marker_array_msg
 from schemas.pointcloud import pack_points, view_points
+from tests.navigation.nav_scenes import (
+    BANK,
+    NOISE,
+    WATER,
+    default_scene,
+    lidar_directions,
+    raycast,
+    with_noise,
+)
 
 MARGIN_M = 0.35  # object points this close to water or terrain may go with the background
 

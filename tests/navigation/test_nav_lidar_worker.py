@@ -9,11 +9,11 @@ from multiprocessing.shared_memory import SharedMemory
 
 import numpy as np
 import pytest
-from nav_scenes import default_scene, lidar_directions, raycast
 
 from navigation.config import LidarConfig
 from navigation.lidar import LidarResult, process_scan
 from navigation.lidar_worker import ProcessLidarWorker, ThreadLidarWorker, lidar_worker_for
+from tests.navigation.nav_scenes import default_scene, lidar_directions, raycast
 
 pytestmark = pytest.mark.slow
 

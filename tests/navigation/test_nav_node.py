@@ -11,21 +11,26 @@ from collections.abc import AsyncIterator
 from pathlib import Path
 from typing import Any
 
-import cv2
 import numpy as np
 import pytest
-from lidar_gate import GatedScan
-from nav_scenes import default_scene, lidar_directions, radar_noise_image, raycast
 
 from clients import RosbridgeClient
 from clients.tracing import Tracer
 from navigation.cli import main
 from navigation.config import NavigationConfig
 from navigation.lidar_worker import ProcessLidarWorker, ThreadLidarWorker
-from navigation.messages import header_msg
 from navigation.node import NavigationNode, serve
 from navigation.processors import Processors
 from schemas.pointcloud import pack_points
+from tests.navigation.lidar_gate import GatedScan
+from tests.navigation.nav_scenes import (
+    camera_line_msg,
+    default_scene,
+    imu_msg,
+    lidar_directions,
+    radar_image_msg,
+    raycast,
+)
 
 pytestmark = pytest.mark.slow
 WAIT_S = 30.0
@@ -63,39 +68,11 @@ def scan_msg(stamp_ns: int) -> dict[str, Any]:
 
 
 def radar_msg(stamp_ns: int) -> dict[str, Any]:
-    power = radar_noise_image(72, 800, 1.0, seed=1)
-    power[18, 400] = 500.0  # 90 deg, 100.125 m
-    return {
-        "header": header_msg(stamp_ns, "radar"),
-        "azimuth_min_rad": 0.0,
-        "azimuth_step_rad": float(np.float32(np.deg2rad(5.0))),
-        "beam_width_azimuth_rad": float(np.float32(np.deg2rad(5.0))),
-        "beam_width_elevation_rad": float(np.float32(np.deg2rad(15.0))),
-        "range_min_m": 0.0,
-        "range_step_m": 0.25,
-        "num_beams": 72,
-        "num_cells": 800,
-        "reflectance": power.reshape(-1),
-    }
+    return radar_image_msg(stamp_ns, n_cells=800, range_step_m=0.25, target_cell=400)  # 100.125 m
 
 
 def camera_msg(stamp_ns: int) -> dict[str, Any]:
-    image = np.full((480, 640, 3), 30, np.uint8)
-    cv2.line(image, (0, 300), (639, 300), (255, 255, 255), 3)
-    jpeg = cv2.imencode(".jpg", image)[1].tobytes()
-    return {"header": header_msg(stamp_ns, "camera"), "format": "jpeg", "data": jpeg}
-
-
-def imu_msg(stamp_ns: int) -> dict[str, Any]:
-    return {
-        "header": header_msg(stamp_ns, "imu"),
-        "orientation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0},
-        "orientation_covariance": [0.0] * 9,
-        "angular_velocity": {"x": 0.0, "y": 0.0, "z": 0.01},
-        "angular_velocity_covariance": [0.0] * 9,
-        "linear_acceleration": {"x": 0.0, "y": 0.0, "z": 9.81},
-        "linear_acceleration_covariance": [0.0] * 9,
-    }
+    return camera_line_msg(stamp_ns, width_px=640, height_px=480)
 
 
 async def first(sub, predicate=lambda msg: True) -> dict[str, Any]:
@@ -119,6 +96,27 @@ async def wait_until(condition, what: str) -> None:
         raise AssertionError(f"timed out waiting for {what}") from None
 
 
+async def until_subscribed(peer, topics: tuple[str, ...]) -> None:
+    """Wait until the bridge lists a subscriber on each of `topics` (messages published before
+    would be lost: none of them is latched)."""
+
+    async def subscribed() -> bool:
+        for topic in topics:
+            reply = await peer.call_service("/rosapi/subscribers", {"topic": topic})
+            if not reply["subscribers"]:
+                return False
+        return True
+
+    async def poll() -> None:
+        while not await subscribed():
+            await asyncio.sleep(0.05)
+
+    try:
+        await asyncio.wait_for(poll(), WAIT_S)
+    except TimeoutError:
+        raise AssertionError(f"timed out waiting for subscribers of {topics}") from None
+
+
 async def test_sensor_data_in_navigation_outputs_out(bridge_url, peer):
     stop = asyncio.Event()
     node_task = asyncio.create_task(serve(bridge_url, NavigationConfig(), stop))
@@ -134,7 +132,9 @@ async def test_sensor_data_in_navigation_outputs_out(bridge_url, peer):
         ]
     }
     try:
-        await asyncio.sleep(0.5)  # let the node subscribe before the first publish
+        await until_subscribed(
+            peer, ("/imu/data", "/lidar/points", "/radar/image", "/camera/image/compressed")
+        )
         stamp = 1_000_000_000
         scan, radar, camera = scan_msg(stamp), radar_msg(stamp), camera_msg(stamp)
         for i in range(20):

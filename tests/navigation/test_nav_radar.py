@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from nav_scenes import radar_noise_image
 
 from navigation.cfar import CfarDetector
 from navigation.config import CfarConfig
@@ -16,6 +15,7 @@ from navigation.radar import (
     radar_power,
     target_labels,
 )
+from tests.navigation.nav_scenes import radar_noise_image
 
 
 def radar_image_msg(power: np.ndarray) -> dict:

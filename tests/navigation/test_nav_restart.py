@@ -16,18 +16,24 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
-import cv2
 import numpy as np
 import pytest
-from nav_scenes import default_scene, lidar_directions, radar_noise_image, raycast
 
 from bridge.compose import run_bridge
 from bridge.config import BridgeConfig
 from clients import RosbridgeClient
-from navigation.messages import header_msg, stamp_ns_of
+from navigation.messages import stamp_ns_of
 from navigation.node import IMU_INPUT, SENSOR_INPUTS
 from navigation.processors import OUTPUT_TYPES, TOPIC_DIAGNOSTICS, TOPIC_MAP, TOPIC_MARKERS
 from schemas.pointcloud import pack_points
+from tests.navigation.nav_scenes import (
+    camera_line_msg,
+    default_scene,
+    imu_msg,
+    lidar_directions,
+    radar_image_msg,
+    raycast,
+)
 
 pytestmark = pytest.mark.slow
 
@@ -89,41 +95,12 @@ def running_navigation(url: str, log_path: Path) -> Iterator[NavigationProcess]:
 
 def sensor_messages(stamp_ns: int, scan_points: np.ndarray) -> dict[str, dict[str, Any]]:
     """One message per navigation input, all stamped `stamp_ns`."""
-    power = radar_noise_image(72, 200, 1.0, seed=1)
-    power[18, 100] = 500.0
-    radar = {
-        "header": header_msg(stamp_ns, "radar"),
-        "azimuth_min_rad": 0.0,
-        "azimuth_step_rad": float(np.float32(np.deg2rad(5.0))),
-        "beam_width_azimuth_rad": float(np.float32(np.deg2rad(5.0))),
-        "beam_width_elevation_rad": float(np.float32(np.deg2rad(15.0))),
-        "range_min_m": 0.0,
-        "range_step_m": 0.5,
-        "num_beams": 72,
-        "num_cells": 200,
-        "reflectance": power.reshape(-1),
-    }
-    image = np.full((240, 320, 3), 30, np.uint8)
-    cv2.line(image, (0, 150), (319, 150), (255, 255, 255), 3)
-    camera = {
-        "header": header_msg(stamp_ns, "camera"),
-        "format": "jpeg",
-        "data": cv2.imencode(".jpg", image)[1].tobytes(),
-    }
-    imu = {
-        "header": header_msg(stamp_ns, "imu"),
-        "orientation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0},
-        "orientation_covariance": [0.0] * 9,
-        "angular_velocity": {"x": 0.0, "y": 0.0, "z": 0.01},
-        "angular_velocity_covariance": [0.0] * 9,
-        "linear_acceleration": {"x": 0.0, "y": 0.0, "z": 9.81},
-        "linear_acceleration_covariance": [0.0] * 9,
-    }
+    radar = radar_image_msg(stamp_ns, n_cells=200, range_step_m=0.5, target_cell=100)
     return {
         SENSOR_INPUTS["lidar"][0]: pack_points(scan_points, stamp_ns, "lidar"),
         SENSOR_INPUTS["radar"][0]: radar,
-        SENSOR_INPUTS["camera"][0]: camera,
-        IMU_INPUT[0]: imu,
+        SENSOR_INPUTS["camera"][0]: camera_line_msg(stamp_ns, width_px=320, height_px=240),
+        IMU_INPUT[0]: imu_msg(stamp_ns),
     }
 
 

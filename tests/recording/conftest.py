@@ -6,7 +6,8 @@ import sys
 from collections.abc import Iterator
 
 import pytest
-from child_process import REPO_ROOT, running
+
+from tests.child_process import REPO_ROOT, running
 
 RIVERBRIDGE = [sys.executable, str(REPO_ROOT / "riverbridge.py")]
 

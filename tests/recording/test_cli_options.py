@@ -9,6 +9,7 @@ import pytest
 
 from clients.recording import play_cli, record_cli
 from clients.recording.mcap_file import McapRecording
+from tests.cli_checks import assert_refused
 
 
 @pytest.mark.parametrize(
@@ -24,10 +25,7 @@ from clients.recording.mcap_file import McapRecording
 def test_record_names_the_bad_option(
     argv: list[str], option: str, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    with pytest.raises(SystemExit) as exit_info:
-        record_cli.main(argv)
-    assert exit_info.value.code == 2
-    assert option in capsys.readouterr().err
+    assert_refused(record_cli.main, argv, option, capsys)
 
 
 def test_record_without_a_bridge_exits_1(tmp_path: Path) -> None:
@@ -57,10 +55,7 @@ def test_play_names_the_bad_option(
 ) -> None:
     recording = tmp_path / "empty.mcap"
     McapRecording(recording).close()
-    with pytest.raises(SystemExit) as exit_info:
-        play_cli.main([str(recording), *argv])
-    assert exit_info.value.code == 2
-    assert option in capsys.readouterr().err
+    assert_refused(play_cli.main, [str(recording), *argv], option, capsys)
 
 
 def test_play_without_a_bridge_exits_1(tmp_path: Path) -> None:

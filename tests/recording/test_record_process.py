@@ -10,7 +10,6 @@ import time
 from pathlib import Path
 
 import pytest
-from child_process import Running
 from mcap.exceptions import EndOfFile
 from mcap.reader import NonSeekingReader, SeekingReader
 from mcap_ros2.decoder import DecoderFactory
@@ -18,6 +17,7 @@ from mcap_ros2.decoder import DecoderFactory
 from clients import RosbridgeClient
 from schemas.codec_cdr import from_cdr
 from schemas.registry import TypeRegistry
+from tests.child_process import Running
 
 from .conftest import RIVERBRIDGE
 from .messages import CLOUD, IMU, cloud, imu

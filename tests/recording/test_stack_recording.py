@@ -8,11 +8,11 @@ import subprocess
 from pathlib import Path
 
 import pytest
-from launcher.processes import UpProcess
 from mcap.reader import make_reader
 from mcap_ros2.decoder import DecoderFactory
 
 from clients.stack.launcher import NAVIGATION_TOPICS, SIMULATOR_TOPICS
+from tests.launcher.processes import UpProcess
 
 from .conftest import RIVERBRIDGE
 

@@ -15,9 +15,10 @@ from prometheus_client.parser import text_string_to_metric_families
 from bridge.compose import run_bridge
 from bridge.config import BridgeConfig
 from clients import RosbridgeClient
+from clients.node.links import node_links
+from clients.node.telemetry import telemetry
 from clients.report.journeys import spans_of_batch
-from clients.stack.node_links import node_links
-from clients.tracing import Tracer, telemetry
+from clients.tracing import Tracer
 from schemas.tracing import (
     STATS_SERVICE,
     STATS_SERVICE_TYPE,
@@ -131,7 +132,7 @@ async def test_span_batches_go_out_more_often_than_stats(bridge):
         stats = await reader.subscribe(STATS_TOPIC, STATS_TYPE, maxsize=1000)
         async with telemetry(pub, tracer, period_s=1.0, trace_period_s=0.1):
             for k in range(12):  # a span for every batch
-                tracer.record(IMU[0], k, "generate", k, k + 1)
+                tracer.spans.record(IMU[0], k, "generate", k, k + 1)
                 await asyncio.sleep(0.1)
         await asyncio.sleep(0.5)
         batches = [

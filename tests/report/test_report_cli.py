@@ -10,6 +10,9 @@ from pathlib import Path
 import pytest
 
 from clients.report.cli import main, profile_sim_config
+from clients.report.journeys import STAGES as JOURNEY_STAGES
+from clients.report.journeys import TRANSPORT
+from tests.cli_checks import assert_refused
 
 SENSORS = {
     "/lidar/points": 2.0,
@@ -17,21 +20,7 @@ SENSORS = {
     "/camera/image/compressed": 2.0,
     "/imu/data": 50.0,
 }
-STAGES = (
-    "generate",
-    "publish_wait",
-    "encode",
-    "send",
-    "pub_to_bridge",
-    "bridge_in",
-    "fanout",
-    "bridge_to_sub",
-    "decode",
-    "wait",
-    "process",
-    "transport",
-    "result",
-)
+STAGES = (*JOURNEY_STAGES, TRANSPORT, "result")
 
 
 @pytest.mark.parametrize(
@@ -46,8 +35,7 @@ STAGES = (
     ],
 )
 def test_bad_options_name_the_option_and_exit_2(argv, option, capsys):
-    assert main(argv) == 2
-    assert option in capsys.readouterr().err
+    assert_refused(main, argv, option, capsys)
 
 
 def test_a_profile_the_sim_config_sets_itself_is_refused(tmp_path, capsys):

@@ -74,7 +74,7 @@ def test_wait_starts_when_the_message_was_decoded():
 def test_batch_message_carries_process_and_host():
     tracer = Tracer("simulator")
     assert tracer.batch_msg() is None
-    tracer.record("/radar/image", 7, "generate", 1, 2)
+    tracer.spans.record("/radar/image", 7, "generate", 1, 2)
     batch = tracer.batch_msg()
     assert batch["host"] and batch["spans"][0]["process"] == "simulator"
     assert batch["spans"][0]["stage"] == "generate"

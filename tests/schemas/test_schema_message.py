@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from schemas.errors import MessageValidationError, SchemaError
-from schemas.message import default_message, normalize, ns_to_stamp, stamp_to_ns
+from schemas.message import default_message, normalize, ns_to_stamp, payload_bytes, stamp_to_ns
 
 NOW_NS = 1_700_000_123_456_789_012
 
@@ -280,3 +280,15 @@ def test_declared_defaults_of_standard_messages(registry):
     pose = norm(registry, "geometry_msgs/Pose", {})
     assert pose["orientation"] == {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0}
     assert norm(registry, "geometry_msgs/Quaternion", {"w": 0})["w"] == 0.0
+
+
+def test_payload_bytes_counts_arrays_not_structure_and_text_when_asked():
+    msg = {
+        "data": b"x" * 1000,
+        "points": np.zeros((10, 4), np.float32),
+        "header": {"frame_id": "abc"},
+        "covariance": [0.0] * 9,
+        "markers": [{"blob": b"y" * 5}],
+    }
+    assert payload_bytes(msg) == 1000 + 160 + 5
+    assert payload_bytes(msg, count_text=True) == 1000 + 160 + 3 + 5

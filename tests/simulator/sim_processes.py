@@ -13,7 +13,7 @@ import sys
 from collections.abc import Iterator
 from pathlib import Path
 
-from child_process import REPO_ROOT, Running, running  # noqa: F401  (re-exported)
+from tests.child_process import Running, running
 
 _LISTENING = re.compile(r"listening on ws://[^\s:/]+:(?P<port>\d+)")
 

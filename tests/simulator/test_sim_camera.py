@@ -5,11 +5,11 @@ from __future__ import annotations
 import cv2
 import numpy as np
 import pytest
-from sim_scenes import WALL, box_scene
 
 from simulator.camera import Camera, pixel_directions
 from simulator.config import CameraConfig, MountConfig
 from simulator.frames import Pose2D
+from tests.simulator.sim_scenes import WALL, box_scene
 
 LEVEL = CameraConfig(mount=MountConfig(z_m=2.0, pitch_deg=0.0))
 

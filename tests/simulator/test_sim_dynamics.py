@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from sim_scenes import box_scene
 
 from simulator.config import VesselConfig
 from simulator.dynamics import Command, Pose2D, VesselDynamics, VesselState
+from tests.simulator.sim_scenes import box_scene
 
 
 def run(dynamics: VesselDynamics, state: VesselState, command: Command, seconds: float):

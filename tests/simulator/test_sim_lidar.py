@@ -4,12 +4,12 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from sim_scenes import WALL, box_scene
 
 from simulator.config import LidarConfig, MountConfig
 from simulator.frames import Pose2D
 from simulator.lidar import Lidar, lidar_directions
 from simulator.materials import WATER, Material
+from tests.simulator.sim_scenes import WALL, box_scene
 
 WALL_DISTANCE_M = 20.0
 

@@ -4,13 +4,13 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from sim_scenes import WALL, box_part
 
 from simulator.config import MountConfig, RadarConfig
 from simulator.frames import Pose2D
 from simulator.props import MeshPart
 from simulator.radar import Radar, RadarGeometry
 from simulator.scene import Scene
+from tests.simulator.sim_scenes import WALL, box_part
 
 CFG = RadarConfig(mount=MountConfig(z_m=3.0))
 

@@ -14,13 +14,14 @@ import os
 import re
 
 import pytest
-from sim_processes import header_stamp_s, running, running_bridge, simulator_argv
 
 from clients import RosbridgeClient
 from schemas.catalogue import TOPICS as CATALOGUE
 from schemas.catalogue import published_by
 from simulator.config import SimConfig
 from simulator.sensor import config_value
+from tests.child_process import running
+from tests.simulator.sim_processes import header_stamp_s, running_bridge, simulator_argv
 
 pytestmark = pytest.mark.slow
 

@@ -14,7 +14,6 @@ import termios
 import time
 
 import pytest
-from sim_processes import REPO_ROOT, running, running_bridge, simulator_argv
 
 from bridge.compose import run_bridge
 from bridge.config import BridgeConfig
@@ -23,6 +22,8 @@ from schemas.catalogue import TOPICS
 from simulator.config import VesselConfig
 from simulator.teleop import Action, KeyDecoder, TeleopCommand, TeleopScale
 from simulator.teleop_cli import main
+from tests.child_process import REPO_ROOT, running
+from tests.simulator.sim_processes import running_bridge, simulator_argv
 
 SCALE = TeleopScale(max_surge_force_n=4000.0, max_yaw_moment_nm=6000.0, steps=10)
 

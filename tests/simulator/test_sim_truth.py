@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from sim_scenes import WALL, box_part
 
 from simulator import materials
 from simulator.config import LidarConfig, MountConfig, RadarConfig, SimConfig
@@ -15,6 +14,7 @@ from simulator.props import MeshPart
 from simulator.radar import Radar
 from simulator.scene import Scene, build_scene
 from simulator.truth import TRUTH_TYPE, lidar_truth, markers_msg, radar_truth
+from tests.simulator.sim_scenes import WALL, box_part
 
 POST_ID = 0
 

@@ -1,8 +1,9 @@
-"""What the simulator's and the navigation service's command lines share.
+"""What the command lines of riverbridge's nodes share (simulator, navigation; `record` and
+`play` take the client options and the shutdown).
 
-Both are rosbridge clients configured by a TOML file: the same connection options, the same
+A node is a rosbridge client configured by a TOML file: the same connection options, the same
 exit codes (0 a clean stop, 2 a bad config, 1 an unreachable bridge) and the same shutdown on
-SIGINT/SIGTERM or after `--duration` seconds.
+SIGINT/SIGTERM or after `--duration` seconds. :func:`node_main` is a node's whole `main`.
 """
 
 from __future__ import annotations
@@ -12,11 +13,58 @@ import asyncio
 import logging
 import signal
 from collections.abc import Awaitable, Callable
-from typing import TypeVar
+from typing import Protocol, TypeVar
 
 from clients.errors import ConnectionFailed
+from clients.protocol import Encoding
 
 Config = TypeVar("Config")
+Config_contra = TypeVar("Config_contra", contravariant=True)
+
+
+class NodeServe(Protocol[Config_contra]):
+    """A node's `serve`: connect to `url` and run with `config` until `stop` is set."""
+
+    def __call__(
+        self,
+        url: str,
+        config: Config_contra,
+        stop: asyncio.Event,
+        /,
+        *,
+        encoding: Encoding,
+        connect_timeout_s: float,
+    ) -> Awaitable[None]: ...
+
+
+def node_main(
+    argv: list[str] | None,
+    *,
+    prog: str,
+    description: str,
+    config_tables: str,
+    load_config: Callable[[str], Config],
+    default: Callable[[], Config],
+    serve: NodeServe[Config],
+) -> int:
+    """A node's `main`: parse `argv` (bad options exit 2 naming them), then :func:`run_node`
+    with `serve` connected the way the options say."""
+    parser = argparse.ArgumentParser(prog=prog, description=description)
+    add_node_arguments(parser, config_tables)
+    args = parser.parse_args(argv)
+    return run_node(
+        args,
+        logging.getLogger(prog.split()[-1]),
+        load_config,
+        default,
+        lambda config, stop: serve(
+            args.bridge,
+            config,
+            stop,
+            encoding=args.encoding,
+            connect_timeout_s=args.connect_timeout,
+        ),
+    )
 
 
 def add_node_arguments(parser: argparse.ArgumentParser, config_tables: str) -> None:

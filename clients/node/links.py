@@ -3,7 +3,7 @@
 One TCP stream delivers in order, so on a single connection an IMU sample waits behind a 5 MB
 scan on every hop. The bridge loses nothing and lets small messages of other topics past a
 scan it is still working on, but it cannot reorder bytes already on the wire, and on a busy
-machine a scan's transfer takes long: `python benchmarks/relay.py --only scan,scan2
+machine a scan's transfer takes long: `python -m benchmarks.relay --only scan,scan2
 --encodings cbor --repeat 6 --interleave` (load 4-7) gave IMU age p99 38.9 ms on one connection
 against 12.7 ms with the scan and the IMU on connections of their own (scan p50 25.5 against
 22.6 ms). The simulator and the navigation service therefore keep two connections: `bulk` for
@@ -20,8 +20,9 @@ from collections.abc import AsyncIterator
 from dataclasses import dataclass
 
 from clients.client import RosbridgeClient
+from clients.node.telemetry import telemetry
 from clients.protocol import Encoding
-from clients.tracing import Tracer, telemetry
+from clients.tracing import Tracer
 from schemas.runtime.process import freeze_startup_heap, tune_process
 
 

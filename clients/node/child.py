@@ -2,7 +2,7 @@
 
 Each runs as ``sys.executable -m <package> ...`` in its own process group, with Linux's
 parent-death signal set, its stdout and stderr one pipe pumped line by line into the
-supervisor's :class:`~clients.stack.output.PrefixedOutput` (see :mod:`clients.stack.launcher`).
+supervisor's :class:`~clients.node.output.PrefixedOutput` (see :mod:`clients.stack.launcher`).
 """
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 
-from clients.stack.output import PrefixedOutput
+from clients.node.output import PrefixedOutput
 
 log = logging.getLogger("clients.stack.launcher")  # one logger for the supervisor's lines
 
