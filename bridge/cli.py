@@ -19,6 +19,7 @@ from bridge.dds.options import add_dds_options, dds_config_fields, print_config
 from bridge.errors import DdsStartError
 from bridge.server import run_bridge
 from schemas.rosauth import read_secret
+from schemas.runtime import event_loop
 from schemas.runtime.process import freeze_startup_heap, tune_process
 
 logger = logging.getLogger("bridge.cli")
@@ -225,7 +226,13 @@ async def serve_until_signalled(config: BridgeConfig) -> None:
         loop.add_signal_handler(sig, stop.set)
     try:
         async with run_bridge(config) as running:
-            logger.info("listening on %s://%s:%d", scheme(config), config.host, running.port)
+            logger.info(
+                "listening on %s://%s:%d (event loop: %s)",
+                scheme(config),
+                config.host,
+                running.port,
+                event_loop.running_loop_name(),
+            )
             tune_process()
             freeze_startup_heap()
             await stop.wait()
@@ -253,6 +260,10 @@ def main(argv: list[str] | None = None) -> int:
     if args.print_dds_config:
         print(print_config(args))
         return 0
+    try:
+        loop_name = event_loop.chosen_loop()
+    except event_loop.EventLoopChoiceError as exc:
+        parser.error(str(exc))
     logging.basicConfig(
         level=args.log_level.upper(), format="%(asctime)s %(levelname)s %(name)s: %(message)s"
     )
@@ -262,7 +273,7 @@ def main(argv: list[str] | None = None) -> int:
     logging.getLogger("websockets").setLevel(websockets_level)
     with contextlib.suppress(KeyboardInterrupt):
         try:
-            asyncio.run(serve_until_signalled(config))
+            event_loop.run(serve_until_signalled(config), loop_name)
         except DdsStartError as exc:
             logger.error("%s", exc)
             return 1
