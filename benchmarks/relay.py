@@ -54,6 +54,7 @@ import os
 import re
 import subprocess
 import sys
+import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from multiprocessing.connection import Connection
@@ -61,28 +62,35 @@ from typing import Any
 
 import numpy as np
 
-from benchmarks.relay_roles import cpu_s, run_role
+from benchmarks.relay_roles import FANOUT, SUBSCRIBER_PROCESSES, TOPICS, cpu_s, run_role
+from schemas.runtime.event_loop import EVENT_LOOP_ENV
 from schemas.runtime.process import MALLOC_ENV as TUNED_MALLOC
 
-WARMUP_S = 1.0  # scan workload: samples stamped in the first second are not counted
+WARMUP_S = 1.0  # scan workloads: samples stamped in the first second are not counted
 
-# Reference rosbridge_suite 0.11.17 figures from issue 11, same machine, one sitting.
+# Reference figures, not re-measured by this benchmark: rosbridge_suite 0.11.17 measured on this
+# machine in issue 11 (2026-11-24); service round trips as published (performance-measurements.md).
+REFERENCE_SOURCE = "rosbridge_suite 0.11.17, issue 11, this machine, 2026-11-24, not re-measured"
 REFERENCE = {
     "burst": "10,041 of 15,000 delivered",
     "sustained": "3,300-3,600 msg/s",
     "scan-cbor": "does not accept CBOR publishes",
     "scan-json": "scan p50 1,595 ms, IMU p99 546 ms",
-    "scan2-cbor": "-",
-    "scan2-json": "-",
+    "service": "rosbridge_suite on ROS 2 Humble 20 ms rising to 700 ms (RobotWebTools/"
+    "rosbridge_suite#868, 2023); ROS# + rosbridge ~2 s (Unity-Robotics-Hub faq.md); "
+    "published figures, not measured here",
 }
 TARGET = {
-    "burst": "all 15,000 delivered",
-    "sustained": ">= 20,000 msg/s, lossless",
+    "burst": "all 15,000 delivered, >= 0.8x the bare relay",
+    "sustained": "lossless, >= 0.8x the bare relay (1.2x past it)",
     "scan-cbor": "scan p50 <= 12 ms, IMU p99 <= 5 ms",
     "scan-json": "scan p50 <= 45 ms, IMU p99 <= 5 ms",
-    "scan2-cbor": "two connections each: does a second one still help?",
-    "scan2-json": "two connections each: does a second one still help?",
+    "scan2": "two connections each: does a second one still help?",
+    "fanout": "16 subscribers: scan p50 and IMU p99 <= 1.25x the relay's, every scan delivered",
+    "service": "one call at a time: round trip p50/p95",
 }
+BINARY_ONLY = {"fanout"}  # 16 JSON scans would measure the subscriber's base64, not the relay
+TEXT_ONLY = {"service"}  # service ops are JSON for every client
 
 
 # -- orchestration -----------------------------------------------------------------------------
@@ -97,61 +105,65 @@ def one_run(
 ) -> dict[str, Any]:
     ctx = mp.get_context("spawn")
     binary = encoding == "cbor"
-    sub_end, sub_pipe = ctx.Pipe()
+    subs = []
+    for _ in range(SUBSCRIBER_PROCESSES.get(workload, 1)):
+        sub_end, sub_pipe = ctx.Pipe()
+        sub = ctx.Process(target=run_role, args=("sub", sub_pipe, url, binary, workload))
+        sub.start()
+        subs.append((sub, sub_end))
+    for _, sub_end in subs:
+        if not sub_end.poll(60) or sub_end.recv() != "ready":
+            raise RuntimeError("subscriber did not start")
     pub_end, pub_pipe = ctx.Pipe()
-    sub = ctx.Process(target=run_role, args=("sub", sub_pipe, url, binary, workload))
-    sub.start()
-    if not sub_end.poll(30) or sub_end.recv() != "ready":
-        raise RuntimeError("subscriber did not start")
     bridge_cpu = cpu_s(bridge_pid) if bridge_pid else float("nan")
     pub = ctx.Process(
         target=run_role, args=("pub", pub_pipe, url, binary, workload, args.count, args.seconds)
     )
     pub.start()
-    sent, elapsed, pub_cpu = pub_end.recv()
-    sub_end.send(sent)
-    seen, sub_cpu = sub_end.recv()
+    sent, elapsed, pub_cpu, rtts_ms = pub_end.recv()
+    for _, sub_end in subs:
+        sub_end.send(sent)
+    per_process = FANOUT.get(workload, 1) // len(subs)  # connections taking each topic
+    seen, sub_cpu = merge_seen([sub_end.recv() for _, sub_end in subs], workload, per_process)
     bridge_cpu = (cpu_s(bridge_pid) if bridge_pid else float("nan")) - bridge_cpu
     pub.join(10)
-    sub.join(10)
+    for sub, _ in subs:
+        sub.join(10)
     return {
         "sent": sent,
         "elapsed_s": elapsed,
         "seen": seen,
+        "rtts_ms": rtts_ms,
         "cpu_s": {"bridge": bridge_cpu, "publisher": pub_cpu, "subscriber": sub_cpu},
     }
 
 
-def summarize(workload: str, encoding: str, result: dict[str, Any]) -> list[str]:
-    sent, seen = result["sent"], result["seen"]
-    lines = []
-    for topic, n_sent in sent.items():
-        got = seen[topic]
-        ages = got["ages_ms"]
-        if workload.startswith("scan"):
-            ages = ages[int(WARMUP_S * (2 if topic == "/lidar" else 50)) :]
-        span_s = max(1e-9, (got["last_ns"] - got["first_ns"]) / 1e9)
-        loss = n_sent - got["count"]
-        lines.append(
-            f"  {topic:<9} sent {n_sent:>7,} in {result['elapsed_s']:5.2f} s  delivered "
-            f"{got['count']:>7,} ({got['count'] / span_s:>8,.0f}/s)  loss {loss:>6,} "
-            f"({100 * loss / max(1, n_sent):4.1f} %)  out of order {got['out_of_order']}  "
-            f"age p50 {percentile(ages, 50):7.1f}  p99 {percentile(ages, 99):7.1f}  "
-            f"max {max(ages, default=float('nan')):7.1f} ms"
-        )
-    cpu = result["cpu_s"]
-    lines.append(
-        "  CPU s: "
-        + ", ".join(f"{name} {seconds:.2f}" for name, seconds in cpu.items())
-        + " (from connected to done)"
-    )
-    key = workload if not workload.startswith("scan") else f"{workload}-{encoding}"
-    lines.append(f"  reference rosbridge: {REFERENCE[key]}; target: {TARGET[key]}")
-    return lines
+def merge_seen(
+    reports: list[tuple[dict[str, Any], float]], workload: str, connections: int
+) -> tuple[dict[str, Any], float]:
+    """What the subscriber processes saw, as if one had: counts and ages added up, without
+    the ages of the first `WARMUP_S` of the scan workloads."""
+    seen: dict[str, Any] = {}
+    for topics, _ in reports:
+        for topic, got in topics.items():
+            if workload.startswith("scan") or workload == "fanout":
+                warmup = int(WARMUP_S * (2 if topic == "/lidar" else 50)) * connections
+                got["ages_ms"] = got["ages_ms"][warmup:]
+            into = seen.setdefault(topic, {**got, "ages_ms": [], "count": 0, "out_of_order": 0})
+            into["count"] += got["count"]
+            into["out_of_order"] += got["out_of_order"]
+            into["ages_ms"] += got["ages_ms"]
+            into["first_ns"] = min(into["first_ns"] or got["first_ns"], got["first_ns"] or 1 << 62)
+            into["last_ns"] = max(into["last_ns"], got["last_ns"])
+    return seen, sum(cpu for _, cpu in reports)
 
 
-def start_bridge(extra: list[str], root: str | None) -> tuple[subprocess.Popen[str], str]:
+def start_bridge(
+    extra: list[str], root: str | None, loop: str | None = None
+) -> tuple[subprocess.Popen[str], str]:
     env = {**os.environ, **TUNED_MALLOC}
+    if loop is not None:
+        env[EVENT_LOOP_ENV] = loop
     if root is not None:  # another checkout's bridge (e.g. main, for a before/after)
         root = os.path.abspath(root)
         env["PYTHONPATH"] = root
@@ -172,36 +184,39 @@ def start_bridge(extra: list[str], root: str | None) -> tuple[subprocess.Popen[s
 
 async def floor_relay(pipe: Connection) -> None:
     """The floor: a bare websockets relay that forwards publish frames as they came, without
-    validation or re-encoding, and answers every call (the issue's "40-line relay")."""
+    validation or re-encoding, answers rosapi calls itself and forwards other calls to the
+    client that advertised the service (the issue's "40-line relay")."""
     import cbor2
     import orjson
     from websockets.asyncio.server import serve
     from websockets.exceptions import ConnectionClosed
 
     subscribers: dict[str, set[Any]] = {}
+    providers: dict[str, Any] = {}
+    callers: dict[Any, Any] = {}  # call id -> the caller's socket
+
+    async def forward(ws: Any, data: str | bytes) -> None:
+        with contextlib.suppress(ConnectionClosed):
+            await ws.send(data)
 
     async def relay(ws: Any) -> None:
         async for data in ws:
             op = orjson.loads(data) if isinstance(data, str) else cbor2.loads(data)
             if op["op"] == "publish":
                 for sub in list(subscribers.get(op["topic"], ())):
-                    with contextlib.suppress(ConnectionClosed):
-                        await sub.send(data)
+                    await forward(sub, data)
             elif op["op"] == "subscribe":
                 subscribers.setdefault(op["topic"], set()).add(ws)
+            elif op["op"] == "advertise_service":
+                providers[op["service"]] = ws
+            elif op["op"] == "call_service" and op["service"] in providers:
+                callers[op.get("id")] = ws
+                await forward(providers[op["service"]], data)
+            elif op["op"] == "service_response" and op.get("id") in callers:
+                await forward(callers.pop(op.get("id")), data)
             elif op["op"] == "call_service":
-                with contextlib.suppress(ConnectionClosed):
-                    await ws.send(
-                        orjson.dumps(
-                            {
-                                "op": "service_response",
-                                "id": op.get("id"),
-                                "service": op["service"],
-                                "values": {},
-                                "result": True,
-                            }
-                        ).decode()
-                    )
+                answer = {"op": "service_response", "id": op.get("id"), "service": op["service"]}
+                await forward(ws, orjson.dumps({**answer, "values": {}, "result": True}).decode())
         for subs in subscribers.values():
             subs.discard(ws)
 
@@ -233,6 +248,9 @@ def start_targets(args: argparse.Namespace) -> list[Target]:
     else:
         process, url = start_bridge(args.bridge_args, None)
         targets.append(Target("this", url, process.pid, process.terminate))
+    if args.pure:  # this checkout's bridge on the standard event loop
+        process, url = start_bridge(args.bridge_args, None, "asyncio")
+        targets.append(Target("asyncio", url, process.pid, process.terminate))
     if args.compare:
         process, url = start_bridge(args.bridge_args, args.compare)
         targets.append(
@@ -249,40 +267,71 @@ def start_targets(args: argparse.Namespace) -> list[Target]:
     return targets
 
 
+def footprint(targets: list[Target], idle_s: float = 2.0) -> str:
+    """Each relay's resident memory and CPU while idle, before any workload."""
+    before = {t.label: cpu_s(t.pid) for t in targets if t.pid}
+    time.sleep(idle_s)
+    parts = []
+    for t in targets:
+        if t.pid:
+            cpu_percent = 100 * (cpu_s(t.pid) - before[t.label]) / idle_s
+            parts.append(f"{t.label} {rss_mib(t.pid):.0f} MiB, {cpu_percent:.1f} % CPU")
+    return f"idle footprint ({idle_s:g} s): " + "; ".join(parts)
+
+
+def rss_mib(pid: int) -> float:
+    with open(f"/proc/{pid}/status") as status:
+        for line in status:
+            if line.startswith("VmRSS:"):
+                return int(line.split()[1]) / 1024
+    return float("nan")
+
+
 def metrics(workload: str, result: dict[str, Any]) -> dict[str, float]:
-    """The figures of one run, flat: delivered/s, loss %, ages per topic; CPU per process."""
+    """The figures of one run, flat: delivered/s, loss %, ages per topic (round trips for the
+    service workload); CPU per process and the relay's CPU per 10,000 relayed messages."""
     out: dict[str, float] = {}
-    for topic, n_sent in result["sent"].items():
+    copies = FANOUT.get(workload, 1)  # every message goes to this many subscriber sockets
+    relayed = 0
+    if workload == "service":
+        rtts = result["rtts_ms"]
+        out["calls/s"] = len(rtts) / max(1e-9, result["elapsed_s"])
+        for name, q in (("p50", 50), ("p95", 95), ("p99", 99)):
+            out[f"call round trip {name} ms"] = percentile(rtts, q)
+        relayed = 2 * len(rtts)  # the call and its answer
+    for topic, n_sent in result["sent"].items() if workload != "service" else ():
         got = result["seen"][topic]
         ages = got["ages_ms"]
-        if workload.startswith("scan"):
-            ages = ages[int(WARMUP_S * (2 if topic == "/lidar" else 50)) :]
         span_s = max(1e-9, (got["last_ns"] - got["first_ns"]) / 1e9)
         out[f"{topic} delivered/s"] = got["count"] / span_s
-        out[f"{topic} loss %"] = 100 * (n_sent - got["count"]) / max(1, n_sent)
+        out[f"{topic} loss %"] = 100 * (n_sent * copies - got["count"]) / max(1, n_sent * copies)
         for name, q in (("p50", 50), ("p99", 99), ("max", 100)):
             out[f"{topic} age {name} ms"] = percentile(ages, q)
+        relayed += got["count"]
     for name, seconds in result["cpu_s"].items():
         out[f"CPU s {name}"] = seconds
+    out["relay CPU s / 10k msgs"] = 1e4 * result["cpu_s"]["bridge"] / max(1, relayed)
     return out
 
 
 def median_table(targets: list[Target], runs: dict[str, list[dict[str, float]]]) -> list[str]:
-    """Medians per target, and each target's ratio to the first."""
+    """Medians per target, and each target's ratio to the bare relay (else to the first)."""
     labels = [t.label for t in targets]
+    base = "floor" if "floor" in labels else labels[0]
+    others = [label for label in labels if label != base]
     head = (
         f"  {'median of ' + str(len(runs[labels[0]])) + ' runs':<28}"
         + "".join(f"{label:>12}" for label in labels)
-        + "".join(f"{label + '/' + labels[0]:>14}" for label in labels[1:])
+        + "".join(f"{label + '/' + base:>16}" for label in others)
     )
     lines = [head]
     for key in runs[labels[0]][0]:
-        medians = [float(np.median([run[key] for run in runs[label]])) for label in labels]
-        ratios = [m / medians[0] if medians[0] else float("nan") for m in medians[1:]]
+        medians = {label: float(np.median([run[key] for run in runs[label]])) for label in labels}
+        ratios = [medians[o] / medians[base] if medians[base] else float("nan") for o in others]
         lines.append(
             f"  {key:<28}"
-            + "".join(f"{m:>12,.1f}" for m in medians)
-            + "".join(f"{r:>14.2f}" for r in ratios)
+            + "".join(f"{medians[label]:>12,.1f}" for label in labels)
+            + "".join(f"{r:>16.2f}" for r in ratios)
         )
     return lines
 
@@ -291,13 +340,14 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument(
         "--only",
-        default="burst,sustained,scan",
-        help="comma-separated workloads (default %(default)s)",
+        default="burst,sustained,scan,fanout,service",
+        help="comma-separated workloads among burst, sustained, scan, scan2, fanout, service "
+        "(default %(default)s)",
     )
     parser.add_argument("--encodings", default="json,cbor", help="default %(default)s")
     parser.add_argument("--count", type=int, default=15_000, help="burst size")
     parser.add_argument(
-        "--seconds", type=float, default=8.0, help="duration of the sustained and scan workloads"
+        "--seconds", type=float, default=8.0, help="duration of the other workloads"
     )
     parser.add_argument(
         "--repeat",
@@ -319,12 +369,20 @@ def main(argv: list[str] | None = None) -> int:
         "interleaved, and print ratios",
     )
     parser.add_argument(
+        "--pure",
+        action="store_true",
+        help=f"also run this bridge on the standard asyncio loop ({EVENT_LOOP_ENV}=asyncio)",
+    )
+    parser.add_argument(
         "--floor",
         action="store_true",
         help="also run a bare websockets relay (no validation), the floor",
     )
     parser.add_argument("bridge_args", nargs="*", help="options for `python -m bridge`")
     args = parser.parse_args(argv)
+    unknown = set(args.only.split(",")) - set(TOPICS)
+    if unknown:
+        parser.error(f"argument --only: unknown workload(s) {', '.join(sorted(unknown))}")
     os.environ.update(TUNED_MALLOC)  # the client processes move megabytes too
     targets = start_targets(args)
     try:
@@ -332,20 +390,23 @@ def main(argv: list[str] | None = None) -> int:
             f"relays: {', '.join(f'{t.label} {t.url}' for t in targets)} "
             f"{' '.join(args.bridge_args)}; load average {os.getloadavg()[0]:.2f} (1 min)"
         )
-        cases = [(w, e) for w in args.only.split(",") for e in args.encodings.split(",")]
-        if args.interleave:  # every case once per round, so a change of load hits them all
-            runs = {case: new_runs(targets) for case in cases}
-            for _ in range(args.repeat):
-                for case in cases:
-                    run_case(targets, *case, args, runs[case])
+        print(footprint(targets), flush=True)
+        cases = [
+            (w, e)
+            for w in args.only.split(",")
+            for e in args.encodings.split(",")
+            if not (w in BINARY_ONLY and e != "cbor") and not (w in TEXT_ONLY and e != "json")
+        ]
+        runs = {case: new_runs(targets) for case in cases}
+        rounds = [cases] * args.repeat if args.interleave else [[c] * args.repeat for c in cases]
+        for round_cases in rounds:
+            for case in round_cases:
+                run_case(targets, *case, args, runs[case])
+            if not args.interleave:
+                print_case(targets, *round_cases[0], runs[round_cases[0]])
+        if args.interleave:
             for case in cases:
                 print_case(targets, *case, runs[case])
-        else:
-            for case in cases:
-                runs = new_runs(targets)
-                for _ in range(args.repeat):
-                    run_case(targets, *case, args, runs)
-                print_case(targets, *case, runs)
     finally:
         for target in targets:
             target.stop()
@@ -367,20 +428,16 @@ def run_case(
         result = one_run(target.url, workload, encoding, args, target.pid)
         runs["loads"].append(os.getloadavg()[0])
         runs[target.label].append(metrics(workload, result))
-        runs.setdefault("last", result)
 
 
 def print_case(targets: list[Target], workload: str, encoding: str, runs: Runs) -> None:
     loads = runs["loads"]
-    if len(loads) == 1:
-        print(f"{workload} {encoding}  (load {loads[0]:.2f})")
-        print("\n".join(summarize(workload, encoding, runs["last"])), flush=True)
-        return
-    key = workload if not workload.startswith("scan") else f"{workload}-{encoding}"
-    print(
-        f"{workload} {encoding}  (load {min(loads):.2f}-{max(loads):.2f}); reference "
-        f"rosbridge: {REFERENCE[key]}; target: {TARGET[key]}"
-    )
+    key = f"{workload}-{encoding}" if f"{workload}-{encoding}" in TARGET else workload
+    reference = REFERENCE.get(key)
+    print(f"{workload} {encoding}  (load {min(loads):.2f}-{max(loads):.2f}); target: {TARGET[key]}")
+    if reference is not None:
+        source = "" if workload == "service" else f" ({REFERENCE_SOURCE})"
+        print(f"  reference: {reference}{source}")
     print("\n".join(median_table(targets, {t.label: runs[t.label] for t in targets})), flush=True)
 
 

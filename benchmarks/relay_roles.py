@@ -1,5 +1,6 @@
 """The two client processes of `benchmarks/relay.py`: a publisher and a subscriber, one
-websocket each (two with ``scan2``), behaving like a careful third-party rosbridge client.
+websocket each (two with ``scan2``, sixteen subscribers with ``fanout``; with ``service`` a
+caller and a provider), behaving like a careful third-party rosbridge client.
 
 Big JSON frames are encoded and decoded on a thread of their own, in order, as riverbridge's
 own client library does, so the clients add as little as they can to the ages measured. Each
@@ -154,11 +155,21 @@ class Received:
     ages_ms: list[float] = field(default_factory=list)
 
 
-def connection_groups(workload: str) -> list[list[tuple[str, str]]]:
-    """The topics of each connection a client opens: one, or (scan2) the scan and the IMU
-    on connections of their own."""
+# Subscriber connections per workload: `fanout` is the scan and the IMU to 16 subscribers,
+# four connections in each of four processes (one process could not decode 64 MB/s here).
+FANOUT = {"fanout": 16}
+SUBSCRIBER_PROCESSES = {"fanout": 4}
+
+
+def connection_groups(workload: str, role: str = "pub") -> list[list[tuple[str, str]]]:
+    """The topics of each connection a client opens: one, (scan2) the scan and the IMU on
+    connections of their own, or (fanout, subscriber) 16 connections taking both."""
     topics = TOPICS[workload]
-    return [[topic] for topic in topics] if workload == "scan2" else [topics]
+    if workload == "scan2":
+        return [[topic] for topic in topics]
+    if role == "pub":
+        return [topics]
+    return [topics] * (FANOUT.get(workload, 1) // SUBSCRIBER_PROCESSES.get(workload, 1))
 
 
 async def subscriber(pipe: Connection, url: str, binary: bool, workload: str) -> None:
@@ -174,8 +185,11 @@ async def subscriber(pipe: Connection, url: str, binary: bool, workload: str) ->
         elif op.get("op") == "service_response":
             subscribed.release()  # the round trip's answer: the subscriptions are in place
 
+    if workload == "service":
+        await provider(pipe, url)
+        return
     async with contextlib.AsyncExitStack() as stack:
-        for group in connection_groups(workload):
+        for group in connection_groups(workload, "sub"):
             sub = await stack.enter_async_context(RawClient(url, binary))
             sub.read(handle)
             for topic, type_name in group:
@@ -192,7 +206,8 @@ async def subscriber(pipe: Connection, url: str, binary: bool, workload: str) ->
         started_cpu_s = cpu_s()
         pipe.send("ready")
         expected = await asyncio.to_thread(pipe.recv)
-        while not all(seen[t].count >= n for t, n in expected.items()):
+        copies = len(connection_groups(workload, "sub"))
+        while not all(seen[t].count >= n * copies for t, n in expected.items()):
             if time.monotonic() - last_frame[0] > IDLE_END_S:
                 break
             await asyncio.sleep(0.05)
@@ -248,9 +263,63 @@ async def publish_scan_imu(pub: Any, imu_pub: Any, seconds: float) -> dict[str, 
     return sent
 
 
+SERVICE, SERVICE_TYPE = "/bench/trigger", "std_srvs/srv/Trigger"
+
+
+async def provider(pipe: Connection, url: str) -> None:
+    """The `service` workload's provider: answers every call at once, from its reading task."""
+    answered = Received()
+    async with RawClient(url, False) as client:
+        ready = asyncio.Event()
+
+        def handle(recv_ns: int, op: Any) -> None:
+            if op.get("op") == "call_service":
+                answered.count += 1
+                reply = {
+                    "op": "service_response",
+                    "service": op["service"],
+                    "id": op.get("id"),
+                    "values": {"success": True, "message": ""},
+                    "result": True,
+                }
+                asyncio.get_running_loop().create_task(client.send(reply))
+            elif op.get("op") == "service_response":
+                ready.set()
+
+        client.read(handle)
+        await client.send({"op": "advertise_service", "service": SERVICE, "type": SERVICE_TYPE})
+        await client.call("/rosapi/get_time")
+        await ready.wait()
+        started_cpu_s = cpu_s()
+        pipe.send("ready")
+        await asyncio.to_thread(pipe.recv)
+        used_cpu_s = cpu_s() - started_cpu_s
+    pipe.send(({SERVICE: answered.__dict__}, used_cpu_s))
+
+
+async def call_in_turn(client: RawClient, seconds: float) -> list[float]:
+    """Call the service one call at a time for `seconds`; the round trips in ms."""
+    answers: asyncio.Queue[int] = asyncio.Queue()
+    client.read(lambda recv_ns, op: answers.put_nowait(recv_ns))
+    rtts_ms: list[float] = []
+    end = time.monotonic() + seconds
+    while time.monotonic() < end:
+        sent_ns = time.time_ns()
+        await client.send({"op": "call_service", "service": SERVICE, "id": f"c{len(rtts_ms)}"})
+        rtts_ms.append((await answers.get() - sent_ns) / 1e6)
+    return rtts_ms
+
+
 async def publisher(
     pipe: Connection, url: str, binary: bool, workload: str, count: int, seconds: float
 ) -> None:
+    if workload == "service":
+        async with RawClient(url, False) as caller:
+            started_cpu_s, started = cpu_s(), time.monotonic()
+            rtts_ms = await call_in_turn(caller, seconds)
+            elapsed = time.monotonic() - started
+        pipe.send(({SERVICE: len(rtts_ms)}, elapsed, cpu_s() - started_cpu_s, rtts_ms))
+        return
     async with contextlib.AsyncExitStack() as stack:
         pubs = []
         for group in connection_groups(workload):
@@ -271,7 +340,7 @@ async def publisher(
             await pub.call("/rosapi/get_time")
         await asyncio.sleep(0.2)
         used_cpu_s = cpu_s() - started_cpu_s
-    pipe.send((sent, elapsed, used_cpu_s))
+    pipe.send((sent, elapsed, used_cpu_s, []))
 
 
 TOPICS = {
@@ -279,6 +348,8 @@ TOPICS = {
     "sustained": [("/chatter", "std_msgs/msg/String")],
     "scan": [("/lidar", "sensor_msgs/msg/PointCloud2"), ("/imu", "sensor_msgs/msg/Imu")],
     "scan2": [("/lidar", "sensor_msgs/msg/PointCloud2"), ("/imu", "sensor_msgs/msg/Imu")],
+    "fanout": [("/lidar", "sensor_msgs/msg/PointCloud2"), ("/imu", "sensor_msgs/msg/Imu")],
+    "service": [(SERVICE, SERVICE_TYPE)],
 }
 
 

@@ -25,6 +25,7 @@ from bridge.dds.cyclone_xml import CycloneSettings, cyclone_xml
 from bridge.errors import DdsStartError
 from schemas.bridge_config import GROUPS
 from schemas.options import add_options, config_values, invalid_options
+from schemas.runtime import event_loop
 from schemas.runtime.process import freeze_startup_heap, tune_process
 
 logger = logging.getLogger("bridge.cli")
@@ -68,7 +69,13 @@ async def serve_until_signalled(config: BridgeConfig) -> None:
         loop.add_signal_handler(sig, stop.set)
     try:
         async with run_bridge(config) as running:
-            logger.info("listening on %s://%s:%d", scheme(config), config.host, running.port)
+            logger.info(
+                "listening on %s://%s:%d (event loop: %s)",
+                scheme(config),
+                config.host,
+                running.port,
+                event_loop.running_loop_name(),
+            )
             tune_process()
             freeze_startup_heap()
             await stop.wait()
@@ -94,6 +101,10 @@ def main(argv: list[str] | None = None) -> int:
         except ValueError as exc:
             parser.error(str(exc))
         return 0
+    try:
+        loop_name = event_loop.chosen_loop()
+    except event_loop.EventLoopChoiceError as exc:
+        parser.error(str(exc))
     logging.basicConfig(
         level=args.log_level.upper(), format="%(asctime)s %(levelname)s %(name)s: %(message)s"
     )
@@ -103,7 +114,7 @@ def main(argv: list[str] | None = None) -> int:
     logging.getLogger("websockets").setLevel(websockets_level)
     with contextlib.suppress(KeyboardInterrupt):
         try:
-            asyncio.run(serve_until_signalled(config))
+            event_loop.run(serve_until_signalled(config), loop_name)
         except DdsStartError as exc:
             logger.error("%s", exc)
             return 1
