@@ -2,7 +2,7 @@
 each (as roslibjs, ROS#, Unity and Foxglove clients connect), JSON and CBOR.
 
 Workloads (issue 11), each printed beside the reference rosbridge_suite 0.11.17 figures measured
-on this machine in the issue:
+on this machine in the issue (stored figures, printed with their source and "NOT re-measured"):
 
 1. burst: 15,000 ~100-byte ``std_msgs/String`` sent as fast as the publisher can while the
    subscriber reads as fast as it can: delivered, loss, delivered/s, ages;
@@ -66,7 +66,12 @@ from schemas.runtime.process import MALLOC_ENV as TUNED_MALLOC
 
 WARMUP_S = 1.0  # scan workload: samples stamped in the first second are not counted
 
-# Reference rosbridge_suite 0.11.17 figures from issue 11, same machine, one sitting.
+# Reference rosbridge_suite 0.11.17 figures from issue 11, same machine, one sitting. They are
+# stored, not re-measured by this script (rosbridge_suite is not installed here), so every line
+# that prints one says where it comes from and when.
+REFERENCE_SOURCE = (
+    "rosbridge_suite 0.11.17 as measured in issue 11 (stored here 2026-11-24), NOT re-measured"
+)
 REFERENCE = {
     "burst": "10,041 of 15,000 delivered",
     "sustained": "3,300-3,600 msg/s",
@@ -146,7 +151,7 @@ def summarize(workload: str, encoding: str, result: dict[str, Any]) -> list[str]
         + " (from connected to done)"
     )
     key = workload if not workload.startswith("scan") else f"{workload}-{encoding}"
-    lines.append(f"  reference rosbridge: {REFERENCE[key]}; target: {TARGET[key]}")
+    lines.append(f"  reference ({REFERENCE_SOURCE}): {REFERENCE[key]}; target: {TARGET[key]}")
     return lines
 
 
@@ -379,7 +384,7 @@ def print_case(targets: list[Target], workload: str, encoding: str, runs: Runs) 
     key = workload if not workload.startswith("scan") else f"{workload}-{encoding}"
     print(
         f"{workload} {encoding}  (load {min(loads):.2f}-{max(loads):.2f}); reference "
-        f"rosbridge: {REFERENCE[key]}; target: {TARGET[key]}"
+        f"({REFERENCE_SOURCE}): {REFERENCE[key]}; target: {TARGET[key]}"
     )
     print("\n".join(median_table(targets, {t.label: runs[t.label] for t in targets})), flush=True)
 

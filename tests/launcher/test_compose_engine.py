@@ -23,6 +23,7 @@ from pathlib import Path
 import pytest
 
 from .docker_engine import (
+    EngineFailed,
     EngineUnavailable,
     build_bases,
     compose_command,
@@ -48,6 +49,8 @@ def engine() -> Iterator[None]:
             yield
     except EngineUnavailable as exc:
         pytest.skip(f"no Docker engine: {exc}")
+    except EngineFailed as exc:
+        pytest.fail(f"the Docker engine failed to start: {exc}", pytrace=False)
 
 
 class Compose:

@@ -119,6 +119,28 @@ async def wait_until(condition, what: str) -> None:
         raise AssertionError(f"timed out waiting for {what}") from None
 
 
+async def until_subscribed(peer, topics: tuple[str, ...]) -> None:
+    """Wait until the bridge lists a subscriber of every topic (rosapi), so a publish reaches
+    the node: the condition itself, not a sleep."""
+
+    async def listed(topic: str) -> bool:
+        reply = await peer.call_service("/rosapi/subscribers", {"topic": topic})
+        return bool(reply["subscribers"])
+
+    async def poll() -> None:
+        for topic in topics:
+            while not await listed(topic):
+                await asyncio.sleep(0.02)
+
+    try:
+        await asyncio.wait_for(poll(), WAIT_S)
+    except TimeoutError:
+        raise AssertionError(f"no subscriber of {topics} listed by the bridge") from None
+
+
+SENSOR_INPUTS = ("/imu/data", "/lidar/points", "/radar/image", "/camera/image/compressed")
+
+
 async def test_sensor_data_in_navigation_outputs_out(bridge_url, peer):
     stop = asyncio.Event()
     node_task = asyncio.create_task(serve(bridge_url, NavigationConfig(), stop))
@@ -134,7 +156,7 @@ async def test_sensor_data_in_navigation_outputs_out(bridge_url, peer):
         ]
     }
     try:
-        await asyncio.sleep(0.5)  # let the node subscribe before the first publish
+        await until_subscribed(peer, SENSOR_INPUTS)  # the node hears the first publish
         stamp = 1_000_000_000
         scan, radar, camera = scan_msg(stamp), radar_msg(stamp), camera_msg(stamp)
         for i in range(20):
@@ -191,7 +213,7 @@ async def test_slow_lidar_neither_delays_camera_and_imu_nor_queues_scans(
         node_task = asyncio.create_task(node.run(stop))
         try:
             await wait_until(lambda: "imu" in node.subscriptions, "node subscriptions")
-            await asyncio.sleep(0.3)
+            await until_subscribed(peer, SENSOR_INPUTS)  # the bridge routes to the node
             scan = scan_msg(1)
             await peer.publish("/lidar/points", scan)
             await wait_until(entered.exists, "the LIDAR step to start")
