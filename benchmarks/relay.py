@@ -2,7 +2,7 @@
 each (as roslibjs, ROS#, Unity and Foxglove clients connect), JSON and CBOR.
 
 Workloads (issue 11), each printed beside the reference rosbridge_suite 0.11.17 figures measured
-on this machine in the issue:
+on this machine in the issue (stored figures, printed with their source and "NOT re-measured"):
 
 1. burst: 15,000 ~100-byte ``std_msgs/String`` sent as fast as the publisher can while the
    subscriber reads as fast as it can: delivered, loss, delivered/s, ages;

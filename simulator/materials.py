@@ -35,6 +35,8 @@ RIVERBED = Material("riverbed", 0.2, 0.2, (90, 80, 60))
 WATER = Material("water", 0.05, 0.05, (52, 92, 120))
 STEEL = Material("steel", 60.0, 0.6, (120, 120, 128))
 VESSEL = Material("vessel", 100.0, 0.7, (200, 200, 205))
+# A steel navigation buoy carries a radar reflector: as bright as a hull to the radar (ours).
+BUOY = Material("buoy", 100.0, 0.6, (200, 60, 40))
 WOOD = Material("wood", 2.0, 0.4, (110, 80, 50))
 FOLIAGE = Material("foliage", 1.0, 0.5, (45, 95, 40))
 BRICK = Material("brick", 20.0, 0.5, (170, 90, 70))

@@ -1,4 +1,5 @@
-"""The scene's objects as ground truth: what a vessel, landing stage, tree or house is and where.
+"""The scene's objects as ground truth: what a vessel, buoy, landing stage, tree or house is,
+where, and whether it stands on the water (an obstacle for a vessel) or on the bank.
 
 Every prop instance is one object with an id, a kind and an oriented box (centre, yaw about z,
 edge lengths along its own axes), in the map frame. Every triangle of the scene knows its
@@ -23,10 +24,12 @@ class SceneObjects:
     """k objects, map frame.
 
     ids : (k,) int64, unique, the value their faces carry in `Scene.face_source`.
-    kinds : (k,) str, e.g. "vessel", "landing_stage", "tree", "house".
+    kinds : (k,) str, e.g. "vessel", "buoy", "landing_stage", "tree", "house".
     centre_xyz : (k, 3) float64 metres, centre of the oriented box.
     yaw_rad : (k,) float64, the box's x axis counter-clockwise from map x (east).
     size_xyz : (k, 3) float64 metres, edge lengths along the box's own axes.
+    on_water : (k,) bool, True for an object in the river (vessels, buoys, pontoons: what a
+        vessel must avoid), False for one on the bank (trees, houses).
     """
 
     ids: np.ndarray
@@ -34,6 +37,7 @@ class SceneObjects:
     centre_xyz: np.ndarray
     yaw_rad: np.ndarray
     size_xyz: np.ndarray
+    on_water: np.ndarray
 
     def __len__(self) -> int:
         return int(self.ids.shape[0])
@@ -46,6 +50,7 @@ class SceneObjects:
             np.empty((0, 3)),
             np.empty(0),
             np.empty((0, 3)),
+            np.empty(0, bool),
         )
 
     def concat(self, other: SceneObjects) -> SceneObjects:
@@ -58,6 +63,7 @@ class SceneObjects:
                     (self.centre_xyz, other.centre_xyz),
                     (self.yaw_rad, other.yaw_rad),
                     (self.size_xyz, other.size_xyz),
+                    (self.on_water, other.on_water),
                 )
             )
         )
@@ -80,11 +86,14 @@ def object_boxes(
     positions: np.ndarray,
     yaws_rad: np.ndarray,
     first_id: int,
+    *,
+    on_water: bool = False,
 ) -> SceneObjects:
     """Oriented boxes of k instanced objects from their vertices.
 
     vertices : (n, 3) map frame; index : (n,) int, the instance (0 .. k-1) of each vertex;
-    positions : (k, 3) and yaws_rad : (k,) of the instances, whose local axes the boxes take.
+    positions : (k, 3) and yaws_rad : (k,) of the instances, whose local axes the boxes take;
+    on_water : whether these objects stand in the river (all k alike).
     """
     k = len(positions)
     rel = np.asarray(vertices, np.float64) - np.asarray(positions)[index]
@@ -107,4 +116,5 @@ def object_boxes(
         centre,
         np.asarray(yaws_rad, np.float64),
         hi - lo,
+        np.full(k, on_water, bool),
     )

@@ -65,7 +65,7 @@ def instance(
     return moved.reshape(-1, 3), faces.reshape(-1, 3)
 
 
-def _part(
+def instanced_part(
     template: trimesh.Trimesh,
     material: Material,
     positions: np.ndarray,
@@ -80,13 +80,19 @@ def _part(
     return MeshPart(vertices, faces, material, ids)
 
 
-def _objects(
-    kind: str, parts: list[MeshPart], positions: np.ndarray, yaws: np.ndarray, first_id: int
+def objects_of(
+    kind: str,
+    parts: list[MeshPart],
+    positions: np.ndarray,
+    yaws: np.ndarray,
+    first_id: int,
+    *,
+    on_water: bool,
 ) -> SceneObjects:
     """Oriented boxes of the objects first_id .. that `parts` build, `kind` for all."""
     vertices = np.concatenate([p.vertices for p in parts])
     ids = np.concatenate([_vertex_ids(p) for p in parts]) - first_id
-    return object_boxes(kind, vertices, ids, positions, yaws, first_id)
+    return object_boxes(kind, vertices, ids, positions, yaws, first_id, on_water=on_water)
 
 
 def _vertex_ids(part: MeshPart) -> np.ndarray:
@@ -96,7 +102,7 @@ def _vertex_ids(part: MeshPart) -> np.ndarray:
     return ids
 
 
-def _box(extent_x: float, extent_y: float, extent_z: float, z_bottom: float) -> trimesh.Trimesh:
+def box_mesh(extent_x: float, extent_y: float, extent_z: float, z_bottom: float) -> trimesh.Trimesh:
     """A box whose bottom face sits at `z_bottom` (local frame)."""
     box: trimesh.Trimesh = trimesh.creation.box(extents=(extent_x, extent_y, extent_z))
     box.apply_translation((0.0, 0.0, z_bottom + extent_z / 2))
@@ -139,10 +145,14 @@ def landing_stages(
     normal = np.column_stack([np.sin(yaws), -np.cos(yaws), np.zeros_like(yaws)])  # to the east
     gangway = positions + normal * side[:, None] * 8.0
     stages = [
-        _part(_box(20.0, 4.0, 1.2, -0.7), materials.STEEL, positions, yaws, first_id=first_id),
-        _part(_box(1.5, 12.0, 0.3, 0.5), materials.WOOD, gangway, yaws, first_id=first_id),
+        instanced_part(
+            box_mesh(20.0, 4.0, 1.2, -0.7), materials.STEEL, positions, yaws, first_id=first_id
+        ),
+        instanced_part(
+            box_mesh(1.5, 12.0, 0.3, 0.5), materials.WOOD, gangway, yaws, first_id=first_id
+        ),
     ]
-    objects = _objects("landing_stage", stages, positions, yaws, first_id)
+    objects = objects_of("landing_stage", stages, positions, yaws, first_id, on_water=True)
     parts = list(stages)
     n_vessels = min(cfg.moored_vessels, len(positions))
     if n_vessels:
@@ -152,15 +162,15 @@ def landing_stages(
         forward = np.column_stack([np.cos(vessel_yaws), np.sin(vessel_yaws), 0 * vessel_yaws])
         cabins = hulls + forward  # cabin 1 m forward of the hull centre
         vessels = [
-            _part(
-                _box(8.0, 2.6, 1.6, -0.6),
+            instanced_part(
+                box_mesh(8.0, 2.6, 1.6, -0.6),
                 materials.VESSEL,
                 hulls,
                 vessel_yaws,
                 first_id=first_vessel,
             ),
-            _part(
-                _box(3.0, 2.0, 1.5, 1.0),
+            instanced_part(
+                box_mesh(3.0, 2.0, 1.5, 1.0),
                 materials.VESSEL,
                 cabins,
                 vessel_yaws,
@@ -168,7 +178,9 @@ def landing_stages(
             ),
         ]
         parts += vessels
-        objects = objects.concat(_objects("vessel", vessels, hulls, vessel_yaws, first_vessel))
+        objects = objects.concat(
+            objects_of("vessel", vessels, hulls, vessel_yaws, first_vessel, on_water=True)
+        )
     return Props(parts, objects)
 
 
@@ -206,20 +218,26 @@ def trees_and_houses(
         crown = trimesh.creation.icosphere(subdivisions=1, radius=2.5)
         crown.apply_translation((0, 0, 5.0))
         trees = [
-            _part(trunk, materials.WOOD, sites, yaws, scale, first_id),
-            _part(crown, materials.FOLIAGE, sites, yaws, scale, first_id),
+            instanced_part(trunk, materials.WOOD, sites, yaws, scale, first_id),
+            instanced_part(crown, materials.FOLIAGE, sites, yaws, scale, first_id),
         ]
         parts += trees
-        objects = objects.concat(_objects("tree", trees, sites, yaws, first_id))
+        objects = objects.concat(objects_of("tree", trees, sites, yaws, first_id, on_water=False))
     if cfg.houses:
         first_house = first_id + len(objects)
         sites = _land_sites(course, field, rng, cfg.houses, 40.0, 300.0)
         sites[:, 2] -= 0.5  # foundations into the slope
         yaws = rng.uniform(0, 2 * np.pi, cfg.houses)
         houses = [
-            _part(_box(10.0, 8.0, 6.5, 0.0), materials.BRICK, sites, yaws, first_id=first_house),
-            _part(_roof(10.6, 8.6, 6.5, 3.0), materials.ROOF, sites, yaws, first_id=first_house),
+            instanced_part(
+                box_mesh(10.0, 8.0, 6.5, 0.0), materials.BRICK, sites, yaws, first_id=first_house
+            ),
+            instanced_part(
+                _roof(10.6, 8.6, 6.5, 3.0), materials.ROOF, sites, yaws, first_id=first_house
+            ),
         ]
         parts += houses
-        objects = objects.concat(_objects("house", houses, sites, yaws, first_house))
+        objects = objects.concat(
+            objects_of("house", houses, sites, yaws, first_house, on_water=False)
+        )
     return Props(parts, objects)

@@ -22,6 +22,7 @@ from simulator.objects import WATER, SceneObjects
 from simulator.props import MeshPart, landing_stages, trees_and_houses
 from simulator.terrain import HeightField, heightfield_mesh, load_terrain
 from simulator.valley import generate_valley
+from simulator.water_obstacles import water_obstacles
 
 log = logging.getLogger(__name__)
 
@@ -165,8 +166,11 @@ def build_scene(cfg: SceneConfig | None = None, *, seed: int = 7) -> Scene:
     if course is not None:
         stages = landing_stages(cfg, course, rng)
         rest = trees_and_houses(cfg, course, field, rng, first_id=len(stages.objects))
-        parts += stages.parts + rest.parts
-        objects = stages.objects.concat(rest.objects)
+        afloat = water_obstacles(
+            cfg, course, start, first_id=len(stages.objects) + len(rest.objects)
+        )
+        parts += stages.parts + rest.parts + afloat.parts
+        objects = stages.objects.concat(rest.objects).concat(afloat.objects)
     elif cfg.props_on_loaded_terrain:
         log.warning("props need the procedural river course; none placed on loaded terrain")
     scene = Scene(

@@ -29,6 +29,7 @@ MARKERS_TYPE = "visualization_msgs/msg/MarkerArray"
 MARKER_CUBE, MARKER_ADD = 1, 0  # visualization_msgs/msg/Marker constants
 KIND_COLOURS = {
     "vessel": (1.0, 0.3, 0.2),
+    "buoy": (1.0, 0.5, 0.0),
     "landing_stage": (0.9, 0.8, 0.2),
     "tree": (0.2, 0.8, 0.3),
     "house": (0.7, 0.4, 0.9),
@@ -44,13 +45,15 @@ def truth_msg(
     stamp_ns: int,
     frame_id: str,
     *,
+    water_z_m: float = 0.0,
     dominant_cells: np.ndarray | None = None,
     cell_source: np.ndarray | None = None,
 ) -> dict[str, Any]:
     """Canonical GroundTruthArray of the objects with ``seen`` > 0.
 
     seen : (k,) rays of this scan on each object; centres (k, 3), yaws (k,) in the sensor
-    frame; dominant_cells (k,) and cell_source (beams, cells) int32 for the radar.
+    frame; water_z_m the water surface in that frame; dominant_cells (k,) and cell_source
+    (beams, cells) int32 for the radar.
     """
     index = np.flatnonzero(seen > 0)
     dominant = np.zeros(len(objects), np.int64) if dominant_cells is None else dominant_cells
@@ -58,6 +61,7 @@ def truth_msg(
         {
             "id": int(objects.ids[i]),
             "kind": str(objects.kinds[i]),
+            "on_water": bool(objects.on_water[i]),
             "center": dict(zip("xyz", centres[i].tolist(), strict=True)),
             "yaw_rad": _f32(yaws[i]),
             "size": dict(zip("xyz", objects.size_xyz[i].tolist(), strict=True)),
@@ -72,6 +76,7 @@ def truth_msg(
         "header": header(stamp_ns, frame_id),
         "sensor": sensor,
         "objects": items,
+        "water_z_m": _f32(water_z_m),
         "num_beams": int(shape[0]),
         "num_cells": int(shape[1]),
         "cell_source": (
@@ -89,7 +94,16 @@ def lidar_truth(
     origin, rotation = sensor_pose_in_map(pose, cfg.mount, scene.water_level_m)
     centres, yaws = scene.objects.in_sensor_frame(origin, rotation, pose.yaw_rad)
     seen = counts_per_object(source, len(scene.objects))
-    return truth_msg("lidar", scene.objects, seen, centres, yaws, stamp_ns, cfg.frame_id)
+    return truth_msg(
+        "lidar",
+        scene.objects,
+        seen,
+        centres,
+        yaws,
+        stamp_ns,
+        cfg.frame_id,
+        water_z_m=scene.water_level_m - float(origin[2]),
+    )
 
 
 def radar_truth(
@@ -107,6 +121,7 @@ def radar_truth(
         yaws,
         stamp_ns,
         cfg.frame_id,
+        water_z_m=scene.water_level_m - float(origin[2]),
         dominant_cells=dominant,
         cell_source=sweep.cell_source,
     )

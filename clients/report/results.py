@@ -148,60 +148,113 @@ class Machine:
 
 
 @dataclass(frozen=True)
+class ClassCounts:
+    """Detections and objects of one class, ``on_water`` or ``bank`` (docs/quality.md).
+
+    detections : boxes or targets judged to lie in this class's place (on such an object, or a
+    false one on open water / on land); true_detections : those on an object of this class;
+    objects : visible objects of this class, summed over scans; detected_objects : of those,
+    the ones some detection lies on.
+    """
+
+    detections: int = 0
+    true_detections: int = 0
+    objects: int = 0
+    detected_objects: int = 0
+
+    def __add__(self, other: ClassCounts) -> ClassCounts:
+        summed: ClassCounts = _summed(self, other)
+        return summed
+
+
+@dataclass(frozen=True)
 class LidarCounts:
     """LIDAR boxes against the truth, one scan or pooled (docs/quality.md)."""
 
     boxes: int = 0
-    true_boxes: int = 0
-    visible_objects: int = 0
-    detected_objects: int = 0
+    on_water: ClassCounts = ClassCounts()
+    bank: ClassCounts = ClassCounts()
 
     def __add__(self, other: LidarCounts) -> LidarCounts:
-        return LidarCounts(*(a + b for a, b in zip(_values(self), _values(other), strict=True)))
+        summed: LidarCounts = _summed(self, other)
+        return summed
 
 
 @dataclass(frozen=True)
 class RadarCounts:
-    """Radar targets and cells against the truth, one sweep or pooled (docs/quality.md)."""
+    """Radar targets and cells against the truth, one sweep or pooled (docs/quality.md).
+
+    on_land : targets whose strongest cell is bare terrain (false bank targets);
+    on_open_water : targets on water-only or empty cells (false on-water targets).
+    """
 
     targets: int = 0
-    on_object: int = 0
+    on_water: ClassCounts = ClassCounts()
+    bank: ClassCounts = ClassCounts()
     on_land: int = 0
     on_open_water: int = 0
-    visible_objects: int = 0
-    detected_objects: int = 0
     open_water_cells: int = 0
     open_water_detections: int = 0
 
     def __add__(self, other: RadarCounts) -> RadarCounts:
-        return RadarCounts(*(a + b for a, b in zip(_values(self), _values(other), strict=True)))
+        summed: RadarCounts = _summed(self, other)
+        return summed
 
 
-def _values(counts: LidarCounts | RadarCounts) -> tuple[int, ...]:
-    return tuple(getattr(counts, f.name) for f in dataclasses.fields(counts))
+def _summed(a: Any, b: Any) -> Any:
+    """Field-by-field sum of two counts dataclasses of the same type."""
+    names = [f.name for f in dataclasses.fields(a)]
+    return type(a)(*(getattr(a, n) + getattr(b, n) for n in names))
+
+
+def _ratio(num: int, den: int) -> float:
+    return num / den if den else math.nan
+
+
+@dataclass(frozen=True)
+class ClassQuality:
+    """Precision and recall of one class; NaN when there was nothing to divide by (which
+    never meets a target)."""
+
+    counts: ClassCounts = field(metadata=FLATTEN)
+    precision: float
+    recall: float
+
+    @classmethod
+    def of(cls, counts: ClassCounts) -> ClassQuality:
+        return cls(
+            counts,
+            precision=_ratio(counts.true_detections, counts.detections),
+            recall=_ratio(counts.detected_objects, counts.objects),
+        )
 
 
 @dataclass(frozen=True)
 class LidarQuality:
-    """Precision and recall of the LIDAR boxes, pooled over ``scans``; the matching's limits."""
+    """The LIDAR boxes' quality per class, pooled over ``scans``; the matching's limits."""
 
     scans: int
-    counts: LidarCounts = field(metadata=FLATTEN)
-    precision: float
-    recall: float
+    boxes: int
+    on_water: ClassQuality
+    bank: ClassQuality
     min_returns: int
     range_m: float
     margin_m: float
+    water_band_m: float
 
 
 @dataclass(frozen=True)
 class RadarQuality:
-    """Precision, recall and open-water false alarms of the radar targets over ``sweeps``."""
+    """The radar targets' quality per class and open-water false alarms over ``sweeps``."""
 
     sweeps: int
-    counts: RadarCounts = field(metadata=FLATTEN)
-    precision: float
-    recall: float
+    targets: int
+    on_water: ClassQuality
+    bank: ClassQuality
+    on_land: int
+    on_open_water: int
+    open_water_cells: int
+    open_water_detections: int
     open_water_false_alarm_rate: float
     configured_false_alarm_rate: float
 

@@ -13,9 +13,9 @@ import pytest
 import websockets
 from websockets.frames import Frame, Opcode
 
+from bridge.compose import run_bridge
 from bridge.config import BridgeConfig
 from bridge.framing import frame_header
-from bridge.server import run_bridge
 from schemas import codec_cbor
 from schemas.runtime import event_loop
 

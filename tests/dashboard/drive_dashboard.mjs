@@ -98,8 +98,10 @@ await runScenario("drive_dashboard.mjs", 150000, async () => {
       return { counts: d.counts, frames: d.frames, trace: d.trace.medians(), ages: d.ages.medians() };
     });
     await page.screenshot({ path: screenshotPath });
+    // the badge as it stands now, after steering: not the wait above, which throws instead
+    const connected = await page.locator("#connection").evaluate((el) => el.classList.contains("badge-on"));
     return {
-      connected: true,
+      connected,
       ...state,
       ...steering,
       first,

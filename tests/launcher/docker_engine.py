@@ -35,7 +35,13 @@ CONTEXT_EXCLUDED = ("tests/", "benchmarks/")
 
 
 class EngineUnavailable(Exception):
-    """Why no Docker engine can run here (the test is skipped with this text)."""
+    """Why no Docker engine can run here: a part is not installed or not allowed (the test is
+    skipped with this text, which pytest's summary shows)."""
+
+
+class EngineFailed(Exception):
+    """The engine is installed and could have run but did not start: a failure, with its log
+    (never a skip: a skip is green)."""
 
 
 def cache_dir() -> Path:
@@ -64,7 +70,8 @@ def engine_answers() -> bool:
 @contextlib.contextmanager
 def docker_engine() -> Iterator[None]:
     """A running engine for the block: the one already running, or one started here (and
-    stopped after). Raises :class:`EngineUnavailable` with the reason otherwise.
+    stopped after). Raises :class:`EngineUnavailable` with the reason when a part is missing
+    or not allowed, :class:`EngineFailed` with dockerd's log when it could start and did not.
 
     Test sessions on one machine take turns (a lock file): a session that started dockerd
     stops it at the end, which must not pull the engine from under another session's build.
@@ -101,7 +108,10 @@ def _engine() -> Iterator[None]:
         while not engine_answers():
             if daemon.poll() is not None or time.monotonic() > deadline:
                 tail = log_path.read_text(errors="replace")[-2000:]
-                raise EngineUnavailable(f"dockerd did not start (exit {daemon.poll()}):\n{tail}")
+                raise EngineFailed(
+                    f"dockerd is installed but did not start within {ENGINE_START_S:g} s "
+                    f"(exit {daemon.poll()}); the end of {log_path}:\n{tail}"
+                )
             time.sleep(0.5)
         yield
     finally:

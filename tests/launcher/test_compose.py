@@ -17,7 +17,6 @@ from typing import Literal
 
 import pytest
 
-from clients import RosbridgeClient
 from clients.stack.launcher import (
     MALLOC_ENV,
     NAVIGATION_TOPICS,
@@ -38,6 +37,7 @@ from .compose_support import (
     localize,
     service_env,
 )
+from .sensor_data import map_marking_a_water_obstacle
 
 DEFAULTS = load_compose()
 SERVICES = DEFAULTS["services"]
@@ -215,14 +215,6 @@ def wait_healthy(
         time.sleep(1.0)
 
 
-async def receive_one(url: str, topic: str, type_name: str) -> dict:
-    async with RosbridgeClient(url, encoding="cbor") as client:
-        sub = await client.subscribe(topic, type_name)
-        async for received in sub:
-            return received.msg
-    raise AssertionError(f"no message on {topic}")
-
-
 @pytest.mark.slow
 async def test_compose_services_as_local_processes_make_a_working_pipeline() -> None:
     port = free_port()
@@ -236,10 +228,8 @@ async def test_compose_services_as_local_processes_make_a_working_pipeline() -> 
             wait_healthy(
                 name, localize(healthcheck_command(service), port, config_dir), env, started
             )
-        grid = await receive_one(
-            f"ws://127.0.0.1:{port}", "/nav/obstacle_map", "nav_msgs/msg/OccupancyGrid"
-        )
-        assert grid["info"]["width"] > 0 and len(grid["data"]) > 0
+        # sensor data end to end: the map marks an obstacle the simulator's truth names
+        await map_marking_a_water_obstacle(f"ws://127.0.0.1:{port}")
     finally:
         codes = {process.argv[2]: process.stop() for process in reversed(started)}
     assert codes == {"bridge": 0, "simulator": 0, "navigation": 0}, "\n".join(

@@ -25,6 +25,7 @@ import pytest
 from tests.child_process import REPO_ROOT, free_port, run_command
 
 from .docker_engine import (
+    EngineFailed,
     EngineUnavailable,
     build_bases,
     compose_command,
@@ -49,6 +50,8 @@ def engine() -> Iterator[None]:
             yield
     except EngineUnavailable as exc:
         pytest.skip(f"no Docker engine: {exc}")
+    except EngineFailed as exc:
+        pytest.fail(f"the Docker engine failed to start: {exc}", pytrace=False)
 
 
 class Compose:

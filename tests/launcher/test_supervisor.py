@@ -1,8 +1,9 @@
 """The supervisor with real components: the bridge and the navigation service as processes.
 
-These run without the simulator (the navigation service publishes its obstacle map and
-diagnostics on timers), so the supervision paths are exercised even where the simulator's
-command line is not available.
+These run without the simulator, so the supervision paths are exercised even where the
+simulator's command line is not available. Navigation publishes its obstacle map on a timer
+from start-up, so "it works" means more than a map arriving: the test sends a radar echo as
+the simulator would and waits for the map to mark it (tests/launcher/sensor_data.py).
 """
 
 from __future__ import annotations
@@ -20,13 +21,13 @@ from dataclasses import replace
 
 import pytest
 
-from clients import RosbridgeClient
 from clients.node.child import Component
 from clients.node.output import PrefixedLogHandler, PrefixedOutput
 from clients.stack.launcher import LaunchConfig, Supervisor, stack_components
 from tests.child_process import repo_env
 
 from .processes import kill_leftovers, wait_gone
+from .sensor_data import map_marking_an_echo
 
 pytestmark = pytest.mark.slow
 
@@ -77,20 +78,10 @@ class Harness:
             kill_leftovers(self.pids())
 
 
-async def first_message(url: str, topic: str, type_name: str) -> dict:
-    async with RosbridgeClient(url, encoding="cbor") as client:
-        sub = await client.subscribe(topic, type_name)
-        async with asyncio.timeout(60.0):
-            async for received in sub:
-                return received.msg
-    raise AssertionError(f"{topic} ended without a message")
-
-
 async def test_runs_until_stopped_then_exits_0_leaving_no_process(output: io.StringIO) -> None:
     harness = Harness(bridge_and_navigation(), CONFIG, output)
     url = await asyncio.wait_for(asyncio.shield(harness.ready), 180.0)
-    grid = await first_message(url, "/nav/obstacle_map", "nav_msgs/msg/OccupancyGrid")
-    assert grid["info"]["width"] > 0
+    await map_marking_an_echo(url)
     harness.stop.set()
     assert await harness.finish() == 0, output.getvalue()
     assert wait_gone(harness.pids()) == []
@@ -162,8 +153,7 @@ async def test_killed_components_are_restarted_counted_and_work(output: io.Strin
         [child] = [c for c in harness.supervisor.children if c.component.title == title]
         os.kill(child.pid, signal.SIGKILL)
         await restart_counts_in_metrics(url, {title: 1})
-    grid = await first_message(url, "/nav/obstacle_map", "nav_msgs/msg/OccupancyGrid")
-    assert grid["info"]["width"] > 0
+    await map_marking_an_echo(url)  # the restarted bridge carries sensor data to navigation
     await restart_counts_in_metrics(url, {"bridge": 1, "navigation": 1})
     harness.stop.set()
     assert await harness.finish() == 0, output.getvalue()

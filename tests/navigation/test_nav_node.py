@@ -97,24 +97,25 @@ async def wait_until(condition, what: str) -> None:
 
 
 async def until_subscribed(peer, topics: tuple[str, ...]) -> None:
-    """Wait until the bridge lists a subscriber on each of `topics` (messages published before
-    would be lost: none of them is latched)."""
+    """Wait until the bridge lists a subscriber of every topic (rosapi), so a publish reaches
+    the node: the condition itself, not a sleep."""
 
-    async def subscribed() -> bool:
-        for topic in topics:
-            reply = await peer.call_service("/rosapi/subscribers", {"topic": topic})
-            if not reply["subscribers"]:
-                return False
-        return True
+    async def listed(topic: str) -> bool:
+        reply = await peer.call_service("/rosapi/subscribers", {"topic": topic})
+        return bool(reply["subscribers"])
 
     async def poll() -> None:
-        while not await subscribed():
-            await asyncio.sleep(0.05)
+        for topic in topics:
+            while not await listed(topic):
+                await asyncio.sleep(0.02)
 
     try:
         await asyncio.wait_for(poll(), WAIT_S)
     except TimeoutError:
-        raise AssertionError(f"timed out waiting for subscribers of {topics}") from None
+        raise AssertionError(f"no subscriber of {topics} listed by the bridge") from None
+
+
+SENSOR_INPUTS = ("/imu/data", "/lidar/points", "/radar/image", "/camera/image/compressed")
 
 
 async def test_sensor_data_in_navigation_outputs_out(bridge_url, peer):
@@ -132,9 +133,7 @@ async def test_sensor_data_in_navigation_outputs_out(bridge_url, peer):
         ]
     }
     try:
-        await until_subscribed(
-            peer, ("/imu/data", "/lidar/points", "/radar/image", "/camera/image/compressed")
-        )
+        await until_subscribed(peer, SENSOR_INPUTS)  # the node hears the first publish
         stamp = 1_000_000_000
         scan, radar, camera = scan_msg(stamp), radar_msg(stamp), camera_msg(stamp)
         for i in range(20):
@@ -191,7 +190,7 @@ async def test_slow_lidar_neither_delays_camera_and_imu_nor_queues_scans(
         node_task = asyncio.create_task(node.run(stop))
         try:
             await wait_until(lambda: "imu" in node.subscriptions, "node subscriptions")
-            await asyncio.sleep(0.3)
+            await until_subscribed(peer, SENSOR_INPUTS)  # the bridge routes to the node
             scan = scan_msg(1)
             await peer.publish("/lidar/points", scan)
             await wait_until(entered.exists, "the LIDAR step to start")

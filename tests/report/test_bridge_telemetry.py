@@ -50,6 +50,33 @@ async def collect_spans(sub, until, timeout_s: float = 8.0) -> list:
     return spans
 
 
+async def publish_until_named(pub, trace, peers: dict[str, str], complete):
+    """Publish a freshly stamped message on every topic of ``peers`` (one IMU-shaped message
+    each) until the trace shows one whose fan-out names each topic's expected peer and which
+    ``complete(stamp_ns, spans)`` accepts (its decode span says it was received); (stamp_ns,
+    its spans). A publish before the subscription is routed is lost: the next one is not.
+    The bridge learns a peer's process name from its telemetry, once a second: this waits
+    for exactly that."""
+    async with asyncio.timeout(15.0):
+        while True:
+            stamp_ns = time.time_ns()
+            for topic in peers:
+                await pub.publish(topic, imu_msg(stamp_ns))
+
+            def done(spans: list, stamp_ns: int = stamp_ns) -> bool:
+                return complete(stamp_ns, spans)
+
+            try:  # a publish before the subscription was routed never completes
+                spans = await collect_spans(trace, done, timeout_s=1.0)
+            except TimeoutError:
+                continue
+            named = {
+                s.topic: s.peer for s in spans if s.stamp_ns == stamp_ns and s.stage == "fanout"
+            }
+            if named == peers:
+                return stamp_ns, spans
+
+
 async def test_every_stage_of_a_message_reaches_a_trace_reader(bridge):
     pub_tracer, sub_tracer = Tracer("pub"), Tracer("sub")
     async with (
@@ -62,23 +89,16 @@ async def test_every_stage_of_a_message_reaches_a_trace_reader(bridge):
             telemetry(pub, pub_tracer, period_s=0.2),
             telemetry(sub, sub_tracer, period_s=0.2),
         ):
-            received = await sub.subscribe(*IMU)
+            await sub.subscribe(*IMU)
             await pub.advertise(*IMU)
-            await asyncio.sleep(1.5)  # the bridge learns the subscriber's process name
-            stamp_ns = time.time_ns()
-            await pub.publish(IMU[0], imu_msg(stamp_ns))
-            await received.get()
 
-            def complete(spans):
-                return {s.stage for s in spans if s.stamp_ns == stamp_ns} >= {
-                    "encode",
-                    "send",
-                    "bridge_in",
-                    "fanout",
-                    "decode",
-                }
+            def complete(stamp_ns: int, spans: list) -> bool:
+                stages = {s.stage: s for s in spans if s.stamp_ns == stamp_ns}
+                return set(stages) >= {"encode", "send", "bridge_in", "fanout", "decode"}
 
-            spans = await collect_spans(trace, complete)
+            # the bridge names a peer once its telemetry has announced the process: publish
+            # until a message's fan-out names the subscriber (the condition, not a sleep)
+            stamp_ns, spans = await publish_until_named(pub, trace, {IMU[0]: "sub"}, complete)
     mine = {s.stage: s for s in spans if s.stamp_ns == stamp_ns}
     assert mine["bridge_in"].process == "bridge" and mine["bridge_in"].payload_bytes == 316
     assert mine["fanout"].peer == "sub"
@@ -98,22 +118,19 @@ async def test_both_connections_of_a_node_are_named_after_its_process(bridge):
         assert links.bulk is not links.realtime
         trace = await reader.subscribe(TRACE_TOPIC, TRACE_TYPE, maxsize=1000)
         stats = await reader.subscribe(STATS_TOPIC, STATS_TYPE, maxsize=100)
-        imu = await links.realtime.subscribe(*IMU)
-        fixes = await links.bulk.subscribe(*fix)
+        await links.realtime.subscribe(*IMU)
+        await links.bulk.subscribe(*fix)
         await pub.advertise(*IMU)
         await pub.advertise(*fix)
-        await asyncio.sleep(2.0)  # both connections announce the process (once a second)
-        stamp_ns = time.time_ns()
-        await pub.publish(IMU[0], imu_msg(stamp_ns))
-        await pub.publish(fix[0], imu_msg(stamp_ns))
-        await imu.get()
-        await fixes.get()
 
-        def traced(spans):
+        def traced(stamp_ns: int, spans: list) -> bool:
             seen = {(s.topic, s.stage) for s in spans if s.stamp_ns == stamp_ns}
             return seen >= {(t, stage) for t in (IMU[0], fix[0]) for stage in ("fanout", "decode")}
 
-        spans = await collect_spans(trace, traced)
+        # both connections announce the process (once a second): until both fan-outs name it
+        stamp_ns, spans = await publish_until_named(
+            pub, trace, {IMU[0]: "watcher", fix[0]: "watcher"}, traced
+        )
         announced = [m.msg for m in [await stats.get() for _ in range(4)]]
     peers = {s.topic: s.peer for s in spans if s.stamp_ns == stamp_ns and s.stage == "fanout"}
     assert peers == {IMU[0]: "watcher", fix[0]: "watcher"}
@@ -134,16 +151,27 @@ async def test_span_batches_go_out_more_often_than_stats(bridge):
             for k in range(12):  # a span for every batch
                 tracer.spans.record(IMU[0], k, "generate", k, k + 1)
                 await asyncio.sleep(0.1)
-        await asyncio.sleep(0.5)
-        batches = [
-            b
-            for b in (m.msg for m in _all(trace))
-            if b["spans"] and b["spans"][0]["process"] == "often"
-        ]
+        batches: list = []
+
+        def every_span_arrived() -> bool:
+            batches.extend(
+                b
+                for b in (m.msg for m in _all(trace))
+                if b["spans"] and b["spans"][0]["process"] == "often"
+            )
+            return sum(len(b["spans"]) for b in batches) >= 12
+
+        await until(every_span_arrived, 8.0)  # the last batch goes out as telemetry stops
         announced = [m for m in (m.msg for m in _all(stats)) if m["process"] == "often"]
     assert len(batches) >= 6, len(batches)
     assert 1 <= len(announced) <= 3, len(announced)  # each second, and once more at the end
     assert sorted(s["stamp_ns"] for b in batches for s in b["spans"]) == list(range(12))
+
+
+async def until(condition, timeout_s: float) -> None:
+    async with asyncio.timeout(timeout_s):
+        while not condition():
+            await asyncio.sleep(0.02)
 
 
 def _all(sub) -> list:
@@ -151,6 +179,20 @@ def _all(sub) -> list:
     while (item := sub.get_nowait()) is not None:
         items.append(item)
     return items
+
+
+async def stats_once_counted(client, topic: str, count: int) -> dict[str, Any]:
+    """The stats service's answer once it counts ``count`` messages in on ``topic`` (the
+    publishes are in flight until then: the condition, not a sleep)."""
+    async with asyncio.timeout(5.0):
+        while True:
+            answer = await client.call_service(STATS_SERVICE, type=STATS_SERVICE_TYPE)
+            if topic in answer["topics"]:
+                seen = answer["messages_in"][answer["topics"].index(topic)]
+                assert seen <= count, answer
+                if seen == count:
+                    return dict(answer)
+            await asyncio.sleep(0.02)
 
 
 async def test_stats_service_metrics_and_client_count(bridge):
@@ -165,8 +207,7 @@ async def test_stats_service_metrics_and_client_count(bridge):
             await pub.advertise(*IMU)
             for k in range(3):
                 await pub.publish(IMU[0], imu_msg(time.time_ns() + k))
-            await asyncio.sleep(0.2)
-            answer = await watcher.call_service(STATS_SERVICE, type=STATS_SERVICE_TYPE)
+            answer = await stats_once_counted(watcher, IMU[0], 3)
             async with asyncio.timeout(5):
                 own = (await stats_topic.get()).msg
         metrics = await asyncio.to_thread(fetch, f"http://127.0.0.1:{bridge.port}/metrics")

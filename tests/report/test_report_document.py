@@ -84,30 +84,33 @@ PROCESS_KEYS = [
     "bytes_in",
     "dropped",
 ]
-LIDAR_KEYS = [
-    "scans",
-    "boxes",
-    "true_boxes",
-    "visible_objects",
+CLASS_KEYS = [
+    "detections",
+    "true_detections",
+    "objects",
     "detected_objects",
     "precision",
     "recall",
+]
+LIDAR_KEYS = [
+    "scans",
+    "boxes",
+    "on_water",
+    "bank",
     "min_returns",
     "range_m",
     "margin_m",
+    "water_band_m",
 ]
 RADAR_KEYS = [
     "sweeps",
     "targets",
-    "on_object",
+    "on_water",
+    "bank",
     "on_land",
     "on_open_water",
-    "visible_objects",
-    "detected_objects",
     "open_water_cells",
     "open_water_detections",
-    "precision",
-    "recall",
     "open_water_false_alarm_rate",
     "configured_false_alarm_rate",
 ]
@@ -146,7 +149,11 @@ def observations() -> Observations:
         for sec in (1, 2)
         for name, pid in (("bridge", 11), ("simulator", 12))
     ]
-    truth = {"header": header(1), "objects": [obj(0, (20.0, 0.0, 0.0), (4.0, 4.0, 6.0))]}
+    truth = {
+        "header": header(1),
+        "water_z_m": -3.0,
+        "objects": [obj(0, (20.0, 0.0, 0.0), (4.0, 4.0, 6.0), on_water=True)],
+    }
     boxes = {"header": header(1), "boxes": [box((19.0, -1.0, 0.0), (21.0, 1.0, 2.0))]}
     source = np.full((4, 5), WATER, np.int32)
     source[1, 3], source[2, 2] = 7, LAND
@@ -155,7 +162,7 @@ def observations() -> Observations:
         "num_beams": 4,
         "num_cells": 5,
         "cell_source": source.reshape(-1),
-        "objects": [obj(7, (12.0, 0.0, 0.0), (2.0, 2.0, 2.0), dominant=1)],
+        "objects": [obj(7, (12.0, 0.0, 0.0), (2.0, 2.0, 2.0), dominant=1, on_water=True)],
     }
     detections = {
         "header": header(2),
@@ -212,8 +219,8 @@ def test_a_run_is_built_from_its_window():
     assert run.network.stack_bytes_per_s == 60_000.0  # (250 + 50) kB over 5 s
     assert run.network.report_connection_bytes_per_s == 1_000.0  # counted apart
     quality = run.detection_quality
-    assert quality.lidar is not None and quality.lidar.precision == 1.0
-    assert quality.radar is not None and quality.radar.recall == 1.0
+    assert quality.lidar is not None and quality.lidar.on_water.precision == 1.0
+    assert quality.radar is not None and quality.radar.on_water.recall == 1.0
     assert run.thesis_comparison[0].ours == run.topics["/lidar/points"].stages["transport"].mean
     assert set(run.stage_values) == set(run.topics)
 
@@ -244,6 +251,9 @@ def test_the_json_document_keeps_its_shape():
     assert list(first["processes"]["bridge"]) == PROCESS_KEYS
     assert list(first["detection_quality"]["lidar"]) == LIDAR_KEYS
     assert list(first["detection_quality"]["radar"]) == RADAR_KEYS
+    for sensor in ("lidar", "radar"):
+        for where in ("on_water", "bank"):
+            assert list(first["detection_quality"][sensor][where]) == CLASS_KEYS
     assert first["machine"] == {"cpus": 2, "load_average_1_5_15": [1.0, 2.0, 3.0]}
     rows = document["thesis_comparison"]
     assert {row["run"] for row in rows} == {"thesis/cbor", "thesis/json"}

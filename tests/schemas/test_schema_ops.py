@@ -145,7 +145,8 @@ def test_call_service_args_shapes(args, expected):
 
 def test_call_service_type_is_accepted_whatever_it_is():
     for type_value in ("rosapi/Topics", None, 5, {"x": 1}):
-        parse_op({"op": "call_service", "service": "/s", "type": type_value})
+        call = parse_op({"op": "call_service", "service": "/s", "type": type_value})
+        assert (call.op, call.service, call.type) == ("call_service", "/s", type_value)
 
 
 def test_extras_are_kept():

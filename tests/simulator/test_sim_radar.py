@@ -31,14 +31,17 @@ def reflector_scene(range_m: float, azimuth_deg: float, vessel: Pose2D) -> Scene
     return Scene([MeshPart(moved, part.faces, part.material)], water_level_m=0.0)
 
 
-def test_geometry_follows_table_4_1():
+def test_geometry_follows_table_4_1_with_4_rays_across_a_beam():
+    """Table 4.1's beams and cells; 4 rays across a beam where the table has 2 (config.py)."""
     geometry = RadarGeometry(RadarConfig())
     assert geometry.num_beams == 72  # 360 / 5 deg
     assert geometry.num_cells == 25  # 100 m / 4 m
-    assert geometry.directions_sensor.shape == (72 * 30 * 2, 3)
+    assert geometry.directions_sensor.shape == (72 * 30 * 4, 3)
     elevation_deg = np.degrees(np.arcsin(geometry.directions_sensor[:, 2]))
     assert elevation_deg.min() == pytest.approx(-7.25, abs=1e-4)  # 15 deg in 30 rays
-    assert np.all(np.bincount(geometry.beam_index) == 60)
+    assert np.all(np.bincount(geometry.beam_index) == 120)
+    azimuth_deg = np.degrees(np.arctan2(*geometry.directions_sensor[:4, 1::-1].T))
+    np.testing.assert_allclose(azimuth_deg, [-1.875, -0.625, 0.625, 1.875], atol=1e-4)
 
 
 @pytest.mark.parametrize(
@@ -55,8 +58,8 @@ def test_known_reflector_lands_in_its_cell(range_m, azimuth_deg, yaw_rad):
     beam = round(azimuth_deg / 5.0) % 72
     cell = int(range_m // 4.0)
     assert image.shape == (72, 25) and image.dtype == np.float32
-    # eq. 3.5.3: all 30 x 2 rays of the beam hit, each contributing the reflector's ref_i.
-    assert image[beam, cell] == pytest.approx(60 * WALL.radar_reflectance)
+    # eq. 3.5.3: all 30 x 4 rays of the beam hit, each contributing the reflector's ref_i.
+    assert image[beam, cell] == pytest.approx(120 * WALL.radar_reflectance)
     image[beam, cell] = 0.0
     assert not image.any()
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 import pytest
+from pydantic import ValidationError
 
 from simulator import materials
 from simulator.config import SceneConfig
@@ -95,8 +96,10 @@ def test_thesis_scene_contents(small_scene):
     assert scene.colour_rgb.shape == (f, 3) and scene.colour_rgb.dtype == np.uint8
     assert scene.lidar_reflectivity.shape == (f,)
     np.testing.assert_allclose(np.linalg.norm(scene.face_normals, axis=1), 1.0, atol=1e-5)
-    # Two moored vessels of 12 + 12 triangles each (hull and cabin boxes), reflectance 100.
-    assert np.count_nonzero(scene.radar_reflectance == materials.VESSEL.radar_reflectance) == 48
+    # Two moored and two anchored vessels of 12 + 12 triangles each (hull and cabin boxes),
+    # reflectance 100, and two buoys (12-sided drums, 48 triangles) as bright.
+    assert np.count_nonzero(scene.radar_reflectance == materials.VESSEL.radar_reflectance) == 192
+    assert materials.BUOY.radar_reflectance == materials.VESSEL.radar_reflectance
     # Five landing stages: a steel pontoon (12 triangles) each.
     assert np.count_nonzero(scene.radar_reflectance == materials.STEEL.radar_reflectance) == 60
     # One water quad, with the water's weak LIDAR return.
@@ -112,6 +115,45 @@ def test_start_pose_is_afloat_in_the_river(small_scene):
     origin = np.array([pose.x_m, pose.y_m, small_scene.water_level_m + 0.5], np.float32)
     distance = small_scene.embree.run(origin[None], ahead[None], query="DISTANCE")
     assert distance[0] > 50.0
+
+
+def test_water_obstacles_lie_ahead_in_range_and_leave_a_channel(small_scene):
+    """Four obstacles up the river from the start pose, alternate sides of the centre line,
+    within the radar's 100 m, each leaving >= 25 m of open water beside it (docs/quality.md)."""
+    scene, pose = small_scene, small_scene.start_pose
+    afloat = np.flatnonzero(scene.objects.on_water & (scene.objects.ids >= len(scene.objects) - 4))
+    assert list(scene.objects.kinds[afloat]) == ["buoy", "buoy", "vessel", "vessel"]
+    heading = np.array([np.cos(pose.yaw_rad), np.sin(pose.yaw_rad)])
+    rel = scene.objects.centre_xyz[afloat, :2] - [pose.x_m, pose.y_m]
+    ahead_m, left_m = rel @ heading, rel @ [-heading[1], heading[0]]
+    assert np.all(ahead_m > 20.0) and np.all(np.hypot(*rel.T) < 95.0)
+    # buoys at sites 0 and 2 on the left, anchored vessels at 1 and 3 on the right
+    assert np.all(left_m[:2] > 5.0) and np.all(left_m[2:] < -5.0)
+    for i in afloat:  # open water across the river beside each, to either bank
+        centre, yaw = scene.objects.centre_xyz[i], scene.objects.yaw_rad[i]
+        across = np.array([-np.sin(yaw), np.cos(yaw), 0.0], np.float32)
+        half_beam = scene.objects.size_xyz[i, 1] / 2
+        origins = np.array(
+            [centre + across * (half_beam + 0.1), centre - across * (half_beam + 0.1)]
+        )
+        origins[:, 2] = scene.water_level_m + 0.3
+        reach = scene.embree.run(
+            origins.astype(np.float32), np.array([across, -across]), query="DISTANCE"
+        )
+        assert min(reach) >= 25.0, (scene.objects.kinds[i], reach)
+
+
+def test_water_obstacles_are_a_setting_that_leaves_the_rest_of_the_scene():
+    cfg = SceneConfig(terrain_cells=40, trees=5, houses=2)
+    with_them, without = (
+        build_scene(cfg, seed=1),
+        build_scene(cfg.model_copy(update={"water_obstacles": 0}), seed=1),
+    )
+    assert len(with_them.objects) == len(without.objects) + 4
+    np.testing.assert_array_equal(with_them.objects.centre_xyz[:-4], without.objects.centre_xyz)
+    with pytest.raises(ValidationError, match="water_obstacles_offset_m"):
+        SceneConfig(water_obstacles_offset_m=20.0)  # 45 - 20 - 1.3 m < 25 m beside it
+    assert SceneConfig(water_obstacles=0, water_obstacles_offset_m=20.0).water_obstacles == 0
 
 
 def test_default_scene_has_about_half_a_million_triangles():

@@ -45,11 +45,15 @@ def test_every_prop_of_the_thesis_scene_is_an_object_with_a_box():
     objects = scene.objects
     kinds, counts = np.unique(objects.kinds.astype(str), return_counts=True)
     assert dict(zip(kinds, counts, strict=True)) == {  # thesis 3.5.1 and SceneConfig
+        "buoy": 2,  # water obstacles 0 and 2
         "house": 30,
         "landing_stage": 5,
         "tree": 160,
-        "vessel": 2,
+        "vessel": 4,  # two moored, water obstacles 1 and 3 at anchor
     }
+    on_water = {str(k) for k in np.unique(objects.kinds[objects.on_water])}
+    assert on_water == {"buoy", "landing_stage", "vessel"}
+    assert set(np.unique(objects.kinds[~objects.on_water]).astype(str)) == {"house", "tree"}
     np.testing.assert_array_equal(objects.ids, np.arange(len(objects)))
     tagged = np.unique(scene.face_source[scene.face_source >= 0])
     np.testing.assert_array_equal(tagged, objects.ids)
@@ -190,6 +194,7 @@ def test_markers_show_every_object_in_the_map_frame(check_canonical):
         np.array([[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]]),
         np.array([0.0, 1.0]),
         np.array([[1.0, 1.0, 5.0], [10.0, 8.0, 9.5]]),
+        np.array([False, False]),
     )
     msg = markers_msg(objects, 11)
     check_canonical("visualization_msgs/msg/MarkerArray", msg)

@@ -1,4 +1,8 @@
-"""ROS# (siemens/ros-sharp) wire habits against the bridge.
+"""An emulation of ROS#'s (siemens/ros-sharp) wire habits against the bridge.
+
+ROS# is a .NET library and .NET does not run here, so these tests are not ROS# itself: a raw
+websocket peer sends and reads frames the way ROS#'s source and docs (reference/
+rosbridge-clients.md) say it does, and each test checks the bridge copes with that habit.
 
 ROS# serializes with System.Text.Json and sends every op as JSON in BINARY websocket frames,
 split into 1024-byte continuation fragments, with the op-specific fields first and `op`, `id`
@@ -32,7 +36,9 @@ def assert_plain_json_text(raw: str | bytes) -> None:
     assert json.loads(raw)["op"] != "fragment"
 
 
-async def test_subscribe_and_call_in_fragmented_binary_frames(bridge: BridgeEndpoint) -> None:
+async def test_emulated_rossharp_subscribes_and_calls_in_fragmented_binary_frames(
+    bridge: BridgeEndpoint,
+) -> None:
     topic = "/compat/rs_imu"
     published = imu(frame_id="imu_Ölhafen")
     async with wire_peer(bridge.url) as unity, wire_peer(bridge.url) as publisher:
@@ -76,7 +82,9 @@ async def test_subscribe_and_call_in_fragmented_binary_frames(bridge: BridgeEndp
     assert "status" not in unity.received_ops()
 
 
-async def test_advertise_and_publish_in_fragmented_binary_frames(bridge: BridgeEndpoint) -> None:
+async def test_emulated_rossharp_advertises_and_publishes_in_fragmented_binary_frames(
+    bridge: BridgeEndpoint,
+) -> None:
     topic = "/compat/rs_log"
     long_text = "Schleuse Dörverden: " + "wait " * 600  # ~3 kB: several 1024-byte fragments
     async with wire_peer(bridge.url) as listener, wire_peer(bridge.url) as unity:
@@ -95,7 +103,7 @@ async def test_advertise_and_publish_in_fragmented_binary_frames(bridge: BridgeE
     assert frame.message["msg"] == {"data": long_text}
 
 
-async def test_rossharp_service_provider_with_null_id(bridge: BridgeEndpoint) -> None:
+async def test_emulated_rossharp_service_provider_with_null_id(bridge: BridgeEndpoint) -> None:
     service = "/compat/rs_trigger"
     async with wire_peer(bridge.url) as unity, wire_peer(bridge.url) as caller:
         await send_like_rossharp(
@@ -122,7 +130,7 @@ async def test_rossharp_service_provider_with_null_id(bridge: BridgeEndpoint) ->
     assert response.message["values"] == {"success": True, "message": "Unity says hi"}
 
 
-async def test_rossharp_get_param_with_ros2_default_value(bridge: BridgeEndpoint) -> None:
+async def test_emulated_rossharp_get_param_with_ros2_default_value(bridge: BridgeEndpoint) -> None:
     """ROS#'s ROS 2 GetParam request is {name, default_value}; values are JSON text."""
     async with wire_peer(bridge.url) as unity:
         await send_like_rossharp(

@@ -1,0 +1,148 @@
+"""Recovery: how long after a kill -9 a component is back and the IMU flows again.
+
+Runs `python -m clients.stack.up_cli --port 0` (bridge, simulator, navigation) and an IMU
+client that reconnects on its own (clients.RosbridgeClient, backoff 0.25 s), then kills each
+component with SIGKILL in turn, `--rounds` times, waiting between kills until the IMU has
+flowed for `--settle` seconds. Per component it prints the medians (and max) of
+*respawned* (kill -> up has started the new process) and *IMU back* (kill -> the first IMU
+sample stamped after the kill reaches the client), beside the target (IMU back within 5 s,
+the issue's bound) and the machine's load. tests/launcher/test_up_stack.py checks that the
+stack recovers at all; this is where the time is measured.
+
+Usage: python benchmarks/recovery.py [--rounds 3] [--settle 5]
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import os
+import re
+import signal
+import statistics
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path[:0] = [str(ROOT)]
+
+from clients import RosbridgeClient  # noqa: E402
+
+CONNECT = re.compile(r"connect to (ws://[\d.]+:\d+)")
+STARTED = re.compile(r"\[up\]\s+started (\w+) \(pid (\d+)\)")
+TITLES = ("navigation", "simulator", "bridge")
+IMU_BACK_TARGET_S = 5.0  # the issue's bound from a kill -9 to IMU flowing again
+
+
+class Stack:
+    """`up` as a child process; its output lines tell each component's current pid."""
+
+    def __init__(self) -> None:
+        self.process = subprocess.Popen(
+            [sys.executable, "-m", "clients.stack.up_cli", "--port", "0"],
+            cwd=ROOT,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.STDOUT,
+            text=True,
+            bufsize=1,
+        )
+        self.pids: dict[str, int] = {}
+        self.url = ""
+
+    async def pump(self, ready: asyncio.Event) -> None:
+        assert self.process.stdout is not None
+        while line := await asyncio.to_thread(self.process.stdout.readline):
+            if match := STARTED.search(line):
+                self.pids[match.group(1)] = int(match.group(2))
+            if not self.url and (match := CONNECT.search(line)):
+                self.url = match.group(1)
+                ready.set()
+
+    def stop(self) -> None:
+        self.process.send_signal(signal.SIGINT)
+        try:
+            self.process.wait(60)
+        except subprocess.TimeoutExpired:
+            self.process.kill()
+
+
+async def until(condition, timeout_s: float) -> None:  # type: ignore[no-untyped-def]
+    """Poll `condition` every 10 ms; TimeoutError after `timeout_s`."""
+    async with asyncio.timeout(timeout_s):
+        while not condition():
+            await asyncio.sleep(0.01)
+
+
+async def measure(rounds: int, settle_s: float) -> dict[str, list[tuple[float, float]]]:
+    """(respawned s, IMU back s) per kill, by component."""
+    stack, ready = Stack(), asyncio.Event()
+    pump = asyncio.create_task(stack.pump(ready))
+    figures: dict[str, list[tuple[float, float]]] = {t: [] for t in TITLES}
+    arrivals: list[tuple[float, float]] = []  # (received, stamp), wall-clock seconds
+    try:
+        await asyncio.wait_for(ready.wait(), 300)
+        async with RosbridgeClient(stack.url, encoding="cbor", backoff_max=0.25) as client:
+            sub = await client.subscribe("/imu/data", "sensor_msgs/msg/Imu")
+
+            async def collect() -> None:
+                async for received in sub:
+                    stamp = received.msg["header"]["stamp"]
+                    arrivals.append((time.time(), stamp["sec"] + stamp["nanosec"] / 1e9))
+
+            collector = asyncio.create_task(collect())
+            for _ in range(rounds):
+                for title in TITLES:
+                    flowing_since = time.time()
+                    await until(lambda t=flowing_since: _flowed(arrivals, t, settle_s), 120)
+                    pid, killed = stack.pids[title], time.time()
+                    os.kill(pid, signal.SIGKILL)
+                    await until(lambda t=title, p=pid: stack.pids[t] != p, 60)
+                    respawned = time.time() - killed
+                    await until(lambda k=killed: any(s > k for _, s in arrivals[-100:]), 60)
+                    back = min(r for r, s in arrivals if s > killed) - killed
+                    figures[title].append((respawned, back))
+                    print(
+                        f"{title}: respawned {respawned:.2f} s, IMU back {back:.2f} s", flush=True
+                    )
+            collector.cancel()
+    finally:
+        stack.stop()
+        pump.cancel()
+    return figures
+
+
+def _flowed(arrivals: list[tuple[float, float]], since: float, settle_s: float) -> bool:
+    """IMU samples have kept arriving since `since` for `settle_s` (a restart has settled)."""
+    now = time.time()
+    return now - since >= settle_s and bool(arrivals) and now - arrivals[-1][0] < 0.5
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--rounds", type=int, default=3, help="kills per component")
+    parser.add_argument(
+        "--settle", type=float, default=5.0, metavar="S", help="IMU flowing between kills"
+    )
+    args = parser.parse_args(argv)
+    figures = asyncio.run(measure(args.rounds, args.settle))
+    load = " / ".join(f"{v:.1f}" for v in os.getloadavg())
+    print(f"machine: {os.cpu_count()} CPUs, load average {load} (1/5/15 min)")
+    print(
+        f"{'component':<11} {'kills':>5} {'respawned p50':>14} {'max':>6} "
+        f"{'IMU back p50':>13} {'max':>6}  target"
+    )
+    for title, pairs in figures.items():
+        respawned, back = [p[0] for p in pairs], [p[1] for p in pairs]
+        verdict = "met" if statistics.median(back) <= IMU_BACK_TARGET_S else "MISSED"
+        print(
+            f"{title:<11} {len(pairs):>5} {statistics.median(respawned):>12.2f} s "
+            f"{max(respawned):>5.2f} {statistics.median(back):>11.2f} s {max(back):>5.2f}  "
+            f"IMU back <= {IMU_BACK_TARGET_S:g} s: {verdict}"
+        )
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
