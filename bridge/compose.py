@@ -9,7 +9,7 @@
 from __future__ import annotations
 
 import contextlib
-from collections.abc import AsyncIterator, Callable, Mapping
+from collections.abc import AsyncIterator, Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -44,15 +44,19 @@ class ComposedBridge:
     plugins: Mapping[str, Plugin]
 
 
-def compose(config: BridgeConfig, registry: TypeRegistry | None = None) -> ComposedBridge:
-    """Core, edge, host and plug-ins for `config`; `registry` defaults to the standard types
-    plus `config.interface_dirs`."""
+def compose(
+    config: BridgeConfig,
+    registry: TypeRegistry | None = None,
+    more: Sequence[tuple[str, PluginFactory]] = (),
+) -> ComposedBridge:
+    """Core, edge, host and plug-ins for `config` (then those of `more`: a tool's own, a
+    test's); `registry` defaults to the standard types plus `config.interface_dirs`."""
     if registry is None:
         registry = TypeRegistry.with_defaults(config.interface_dirs)
     server = BridgeServer(config, BridgeCore(config, registry))
     host = PluginHost(server.core, server)
-    plugins = {name: build(host) for name, wanted, build in plugin_table(config) if wanted}
-    return ComposedBridge(server, host, plugins)
+    wanted = [(name, build) for name, on, build in plugin_table(config) if on] + list(more)
+    return ComposedBridge(server, host, {name: build(host) for name, build in wanted})
 
 
 @dataclass(frozen=True)
@@ -80,10 +84,12 @@ class RunningBridge:
 
 @contextlib.asynccontextmanager
 async def run_bridge(
-    config: BridgeConfig, registry: TypeRegistry | None = None
+    config: BridgeConfig,
+    registry: TypeRegistry | None = None,
+    more: Sequence[tuple[str, PluginFactory]] = (),
 ) -> AsyncIterator[RunningBridge]:
-    """Start a bridge and its plug-ins for the duration of the `async with` block."""
-    bridge = compose(config, registry)
+    """Start a bridge and its plug-ins (`compose`) for the duration of the `async with`."""
+    bridge = compose(config, registry, more)
     await bridge.server.start()
     started: list[Plugin] = []
     try:
