@@ -31,7 +31,9 @@ ReceiverT_contra = TypeVar("ReceiverT_contra", contravariant=True)
 
 
 def _missing_result_is_success(op: JsonObject) -> None:
-    op.setdefault("result", True)
+    """Only ``false`` is failure (roslibpy, roslibjs): an absent or null ``result`` is not."""
+    if op.get("result") is None:
+        op["result"] = True
 
 
 def _status_from_values(op: JsonObject) -> None:

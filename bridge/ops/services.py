@@ -24,6 +24,7 @@ from schemas.ops import (
     CallService,
     ServiceResponse,
     UnadvertiseService,
+    reply_id,
 )
 from schemas.specs import MessageSpec
 from schemas.typenames import is_valid_type_name, normalize_type_name
@@ -81,7 +82,7 @@ def answer_rosapi(ctx: Context, service: RosapiService, args: JsonValue) -> Mess
 
 def handle_call_service(ctx: Context, session: ClientSession, op: CallService) -> None:
     name_part, _, suffix = op.service.partition("#")
-    call_id = op.id if op.id is not None else (suffix or None)
+    call_id = op.id if op.id is not None else reply_id(suffix or None)  # a long one: none
     try:
         name = absolute_name(name_part)
         values = call(ctx, session, name, op, call_id)

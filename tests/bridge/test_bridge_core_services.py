@@ -315,3 +315,14 @@ def test_a_failing_handler_still_answers_the_caller(harness):
     response = harness.call(caller, "/rosapi/broken")
     assert response["result"] is False and "bug" in response["values"]
     assert harness.call(caller, "/rosapi/nodes")["result"] is True
+
+
+def test_a_service_suffix_id_is_echoed_only_if_it_is_an_acceptable_id(harness):
+    """`/srv#id` names the call's id (protocol §2.6); one longer than an id may be is dropped
+    from the answer, as any unacceptable id is, and the caller is still answered."""
+    caller = harness.connect()
+    harness.send(caller, {"op": "call_service", "service": "/nowhere#mine"})
+    harness.send(caller, {"op": "call_service", "service": "/nowhere#" + "x" * 400})
+    answers = harness.outbox(caller)
+    assert [a.get("id") for a in answers] == ["mine", None]
+    assert all(a["result"] is False for a in answers)

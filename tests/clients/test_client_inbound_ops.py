@@ -111,6 +111,11 @@ CASES: list[tuple[str | bytes, list[Event]]] = [
         [ServiceReply("call_service:/add:3", "/add", True, {"sum": 5})],
     ),
     (
+        '{"op":"service_response","service":"/add","values":{"sum":2},"result":null,'
+        '"id":"call_service:/add:4"}',
+        [ServiceReply("call_service:/add:4", "/add", True, {"sum": 2})],
+    ),
+    (
         '{"op":"service_response","service":"/add","values":{},"result":true,"id":"nope"}',
         [Ignored("service_response", "no pending call with id 'nope'")],
     ),
