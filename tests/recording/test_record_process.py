@@ -74,7 +74,8 @@ async def test_record_takes_every_message_of_new_topics_and_honours_globs(
             clouds = await publish(
                 client, imu_count=100, imu_hz=100, cloud_every=25, cloud_points=THESIS_SCAN_POINTS
             )
-            await asyncio.sleep(1.0)
+            for path in (everything, imu_only):  # on disk before the stop: the condition
+                await written(path, imu_samples=100)
     finally:
         codes = [recorder.stop() for recorder in recorders]
     assert codes == [0, 0], "\n".join(r.text() for r in recorders)
@@ -103,6 +104,20 @@ def read_until_cut(path: Path) -> tuple[list[float], bool]:
         except EndOfFile:
             cut = True
     return yaw_rates, cut
+
+
+async def written(path: Path, imu_samples: int, timeout_s: float = 30.0) -> None:
+    """Wait until the recorder's file holds ``imu_samples`` IMU samples (its chunks close at
+    least once a second, so a reader of the unfinished file sees them)."""
+    async with asyncio.timeout(timeout_s):
+        while True:
+            try:
+                yaw_rates, _ = await asyncio.to_thread(read_until_cut, path)
+            except (McapError, FileNotFoundError):  # not even a first chunk yet
+                yaw_rates = []
+            if len(yaw_rates) >= imu_samples:
+                return
+            await asyncio.sleep(0.1)
 
 
 async def test_a_killed_recorder_leaves_a_file_readable_to_its_last_chunk(
