@@ -19,7 +19,7 @@ from simulator import materials
 from simulator.config import SceneConfig
 from simulator.frames import Pose2D
 from simulator.objects import WATER, SceneObjects
-from simulator.props import MeshPart, landing_stages, trees_and_houses
+from simulator.props import MeshPart, landing_stages, trees_and_houses, vessels_on_course
 from simulator.terrain import HeightField, heightfield_mesh, load_terrain
 from simulator.valley import generate_valley
 
@@ -165,8 +165,10 @@ def build_scene(cfg: SceneConfig | None = None, *, seed: int = 7) -> Scene:
     if course is not None:
         stages = landing_stages(cfg, course, rng)
         rest = trees_and_houses(cfg, course, field, rng, first_id=len(stages.objects))
-        parts += stages.parts + rest.parts
-        objects = stages.objects.concat(rest.objects)
+        first = len(stages.objects) + len(rest.objects)
+        anchored = vessels_on_course(cfg, course, start.y_m, first_id=first)
+        parts += stages.parts + rest.parts + anchored.parts
+        objects = stages.objects.concat(rest.objects).concat(anchored.objects)
     elif cfg.props_on_loaded_terrain:
         log.warning("props need the procedural river course; none placed on loaded terrain")
     scene = Scene(
