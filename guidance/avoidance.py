@@ -40,6 +40,9 @@ def free_distance_m(
 
     obstacles_m : (n, 2) obstacle points relative to the vessel, map axes, metres
     headings_rad : (k,) map yaws
+    The corridor starts at the vessel's reference point: what is abeam or astern never
+    blocks a heading (a corridor reaching back past the stern stopped the vessel for good
+    beside an obstacle it had come too close to; the stern's swing is in `margin_m`).
     """
     if len(obstacles_m) == 0:
         return np.full(len(headings_rad), range_m)
@@ -63,7 +66,12 @@ def choose_heading(
     offsets = np.deg2rad(cfg.fan_step_deg * np.arange(-steps, steps + 1))  # 0 in the middle
     headings = wrap_rad(route_heading_rad + offsets)
     near = np.hypot(obstacles_m[:, 0], obstacles_m[:, 1]) > cfg.ignore_within_m
-    free = free_distance_m(obstacles_m[near], headings, cfg.clearance_m + half_beam_m, cfg.range_m)
+    free = free_distance_m(
+        obstacles_m[near],
+        headings,
+        cfg.clearance_m + cfg.margin_m + half_beam_m,
+        cfg.range_m,
+    )
     cost = np.abs(offsets)
     if previous_rad is not None:
         cost = cost + cfg.switch_penalty * np.abs(wrap_rad(headings - previous_rad))

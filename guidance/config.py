@@ -74,7 +74,14 @@ class SpeedConfig(_Frozen):
 class AvoidanceConfig(_Frozen):
     """Corridor search on the obstacle map (guidance.avoidance)."""
 
-    clearance_m: Annotated[float, Field(gt=0)] = 10.0  # free water kept beside the hull
+    # Free water kept beside the hull: with the margin the corridor is 23.5 m wide, so the
+    # vessel passes an obstacle that leaves 25 m of open water beside it.
+    clearance_m: Annotated[float, Field(gt=0)] = 8.0
+    # Added to the corridor for what the clearance loses between plan and water: the hull
+    # swinging as it turns back (0.4 m with perfect sensing on the 3-DOF model), the obstacle
+    # map's cells (0.5 m grid, 4 m radar range cells), perception's delay under load.
+    # Measured closest passes: docs/guidance.md.
+    margin_m: Annotated[float, Field(ge=0)] = 2.5
     need_m: Annotated[float, Field(gt=0)] = 50.0  # free run a heading needs to be taken
     range_m: Annotated[float, Field(gt=0)] = 80.0  # look no further (the obstacle map's reach)
     stop_distance_m: Annotated[float, Field(ge=0)] = 15.0  # nothing free beyond this: stop

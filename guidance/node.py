@@ -261,7 +261,12 @@ class GuidanceNode:
                 log.info("%s fresh again", "navigation output" if name == "inputs" else "odometry")
             self._stale[name] = stale
         if decision.mode != self.mode:
-            log.info("mode %s -> %s", self.mode, decision.mode)
+            log.info(
+                "mode %s -> %s: %.0f m along the route, %.1f m off it, steering %.0f deg "
+                "(free %.0f m) at %.1f m/s",
+                self.mode, decision.mode, decision.along_m, decision.cross_track_m,
+                np.degrees(decision.heading_rad), decision.free_m, decision.speed_mps,
+            )  # fmt: skip
             self.mode = decision.mode
             asyncio.get_running_loop().create_task(self._publish_mode())
 

@@ -306,6 +306,7 @@ _ENTRIES = (
         "output",
         "the route followed, map frame",
         latched=True,
+        consumers=("dashboard",),
     ),
     Topic(
         "guidance_target",
@@ -324,6 +325,7 @@ _ENTRIES = (
         "output",
         "follow, avoid, blocked, stale, stop or manual",
         period_s=1.0,
+        consumers=("dashboard",),
     ),
     # Every process's telemetry (docs/tracing.md).
     Topic(
