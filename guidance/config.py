@@ -66,6 +66,13 @@ class RouteConfig(_Frozen):
     lookahead_m: Annotated[float, Field(gt=0)] = 30.0
     arrival_m: Annotated[float, Field(ge=0)] = 20.0  # stop this far before the route's end
 
+    @model_validator(mode="after")
+    def _distinct(self) -> RouteConfig:
+        for k, (a, b) in enumerate(zip(self.waypoints_utm, self.waypoints_utm[1:], strict=False)):
+            if a == b:
+                raise ValueError(f"waypoints_utm repeats point {k} at {k + 1}")
+        return self
+
 
 class SpeedConfig(_Frozen):
     cruise_mps: Annotated[float, Field(gt=0)] = 3.5  # ~7 kn: 77 % of the hull's top speed
