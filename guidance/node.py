@@ -111,6 +111,7 @@ class GuidanceNode:
         self.counters = GuidanceCounters()
         self.mode = "stop"
         self._stale = {"inputs": False, "pose": False}
+        self._mode_tasks: set[asyncio.Task[None]] = set()
 
     async def run(self, stop: asyncio.Event) -> None:
         client = self._client
@@ -268,7 +269,9 @@ class GuidanceNode:
                 np.degrees(decision.heading_rad), decision.free_m, decision.speed_mps,
             )  # fmt: skip
             self.mode = decision.mode
-            asyncio.get_running_loop().create_task(self._publish_mode())
+            task = asyncio.get_running_loop().create_task(self._publish_mode())
+            self._mode_tasks.add(task)  # held until done (the loop keeps only weak references)
+            task.add_done_callback(self._mode_tasks.discard)
 
     async def _publish_mode(self) -> None:
         await self._client.publish(TOPICS["guidance_mode"].name, {"data": self.mode})

@@ -116,3 +116,27 @@ def test_the_heading_loop_turns_towards_the_demand_and_damps_the_rate():
     assert left_of_route.wrench is not None and left_of_route.wrench.yaw_moment_nm < 0
     spinning = pilot.decide(situation(pose=VesselPose(50.0, 0.0, 0.0, 3.5, 0.5)))
     assert spinning.wrench is not None and spinning.wrench.yaw_moment_nm < 0
+
+
+def test_occupied_cells_boxes_and_targets_become_points_placed_with_the_pose_at_their_stamp():
+    from guidance.messages import PoseHistory, box_obstacles, grid_obstacles, to_map
+
+    origin = {"position": {"x": -1.0, "y": -0.5}}
+    grid = {
+        "info": {"width": 4, "height": 2, "resolution": 0.5, "origin": origin},
+        "data": np.array([0, 100, -1, 0, 0, 0, 0, 100], dtype=np.int8),
+    }
+    # row 0 col 1 -> (-1 + 0.75, -0.5 + 0.25); row 1 col 3 -> (-1 + 1.75, -0.5 + 0.75)
+    assert grid_obstacles(grid) == pytest.approx(np.array([[-0.25, -0.25], [0.75, 0.25]]))
+    box = {"min": {"x": 10.0, "y": -1.0, "z": 0.0}, "max": {"x": 12.0, "y": 1.0, "z": 2.0}}
+    high = {"min": {"x": 10.0, "y": -1.0, "z": 30.0}, "max": {"x": 12.0, "y": 1.0, "z": 31.0}}
+    points = box_obstacles({"boxes": [box, high]}, (0.5, 0.0), max_z_m=20.0)
+    assert len(points) == 5 and points[:, 0].min() == 10.5 and points[:, 0].max() == 12.5
+    history = PoseHistory(capacity=4)
+    for k in range(6):  # the oldest two fall out of the ring
+        history.add(k * 1_000_000_000, VesselPose(float(k), 0.0, np.pi / 2, 0.0, 0.0))
+    assert history.at(4_900_000_000) == pytest.approx((5.0, 0.0, np.pi / 2))
+    # bow to the north (+y): 10 m ahead of the vessel at (5, 0) is (5, 10)
+    assert to_map(np.array([[10.0, 0.0]]), (5.0, 0.0, np.pi / 2)) == pytest.approx(
+        np.array([[5.0, 10.0]])
+    )
