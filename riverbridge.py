@@ -15,6 +15,7 @@ SUBCOMMANDS: dict[str, tuple[str, str]] = {
     "bridge": ("bridge.cli", "run the rosbridge v2 websocket server"),
     "sim": ("simulator.cli", "run the simulator (scene, vessel, sensors) against a bridge"),
     "nav": ("navigation.cli", "run the navigation service against a bridge"),
+    "guide": ("guidance.cli", "run guidance and control (the autopilot) against a bridge"),
     "teleop": ("simulator.teleop_cli", "steer the simulated vessel from the keyboard"),
     "up": ("clients.stack.up_cli", "run bridge, simulator and navigation as three local processes"),
     "report": (

@@ -25,14 +25,14 @@ from typing import Any, Literal
 # Who publishes: one of the stack's processes, every process (telemetry; the bridge too),
 # `riverbridge up` (the supervisor), or an operator (the dashboard's keyboard, `riverbridge
 # teleop`, any rosbridge client).
-Producer = Literal["simulator", "navigation", "every process", "supervisor", "operator"]
+Producer = Literal["simulator", "navigation", "guidance", "every process", "supervisor", "operator"]
 # What it carries, and so how its producer treats it:
 #   sensor    heavy sensor data: a worker thread of its own, the producer's bulk connection
 #   realtime  small, frequent messages: the producer's realtime connection, never behind a scan
 #   static    the set-up, latched: sensor mounts, the effective configuration
 #   truth     what the simulator knows, for judging navigation (docs/quality.md)
 #   command   an operator's demand
-#   output    navigation's results
+#   output    navigation's and guidance's results
 #   telemetry how the stack is doing: diagnostics, trace spans, process statistics, restarts
 Role = Literal["sensor", "realtime", "static", "truth", "command", "output", "telemetry"]
 ROLES: tuple[Role, ...] = (
@@ -47,6 +47,7 @@ ROLES: tuple[Role, ...] = (
 PRODUCERS: tuple[Producer, ...] = (
     "simulator",
     "navigation",
+    "guidance",
     "every process",
     "supervisor",
     "operator",
@@ -150,7 +151,7 @@ _ENTRIES = (
         "realtime",
         "the vessel's true pose and velocity",
         rate_key=_PHYSICS,
-        consumers=("dashboard",),
+        consumers=("dashboard", "guidance"),
     ),
     Topic(
         "tf",
@@ -216,8 +217,17 @@ _ENTRIES = (
         "geometry_msgs/msg/Wrench",
         "operator",
         "command",
-        "surge force and yaw moment",
-        consumers=("simulator",),
+        "surge force and yaw moment; overrides the autopilot for a few seconds",
+        consumers=("simulator", "guidance"),
+    ),
+    Topic(
+        "sim_status",
+        "/sim/status",
+        "diagnostic_msgs/msg/DiagnosticArray",
+        "simulator",
+        "telemetry",
+        "who commands the vessel, command timeouts, collisions",
+        period_s=1.0,
     ),
     # Navigation's results (thesis 3.5.3) and its health.
     Topic(
@@ -228,7 +238,7 @@ _ENTRIES = (
         "output",
         "LIDAR obstacle boxes",
         follows="/lidar/points",
-        consumers=("dashboard",),
+        consumers=("dashboard", "guidance"),
     ),
     Topic(
         "markers",
@@ -247,7 +257,7 @@ _ENTRIES = (
         "output",
         "CFAR detections and targets",
         follows="/radar/image",
-        consumers=("dashboard",),
+        consumers=("dashboard", "guidance"),
     ),
     Topic(
         "lines",
@@ -267,7 +277,7 @@ _ENTRIES = (
         "output",
         "LIDAR and radar obstacles fused",
         rate_key="fusion.publish_rate_hz",
-        consumers=("dashboard",),
+        consumers=("dashboard", "guidance"),
     ),
     Topic(
         "diagnostics",
@@ -277,6 +287,45 @@ _ENTRIES = (
         "telemetry",
         "per-sensor rates, gaps, skips and failures",
         period_s=1.0,
+    ),
+    # Guidance and control (docs/guidance.md): the autopilot's command, route and state.
+    Topic(
+        "guidance_cmd",
+        "/guidance/cmd_wrench",
+        "geometry_msgs/msg/WrenchStamped",
+        "guidance",
+        "command",
+        "the autopilot's surge force and yaw moment, stamped at its control tick",
+        consumers=("simulator",),
+    ),
+    Topic(
+        "guidance_path",
+        "/guidance/path",
+        "nav_msgs/msg/Path",
+        "guidance",
+        "output",
+        "the route followed, map frame",
+        latched=True,
+        consumers=("dashboard",),
+    ),
+    Topic(
+        "guidance_target",
+        "/guidance/target",
+        "geometry_msgs/msg/PointStamped",
+        "guidance",
+        "output",
+        "the point on the route the vessel steers for",
+        rate_key="control.rate_hz",
+    ),
+    Topic(
+        "guidance_mode",
+        "/guidance/mode",
+        "std_msgs/msg/String",
+        "guidance",
+        "output",
+        "follow, avoid, blocked, stale, stop or manual",
+        period_s=1.0,
+        consumers=("dashboard",),
     ),
     # Every process's telemetry (docs/tracing.md).
     Topic(

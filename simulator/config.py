@@ -59,6 +59,9 @@ class SceneConfig(_Frozen):
     trees: Annotated[int, Field(ge=0)] = 160
     houses: Annotated[int, Field(ge=0)] = 30
     props_on_loaded_terrain: bool = False  # props are placed along the known procedural river
+    # A scenario for guidance: a vessel at anchor on the river's centre line this far (m)
+    # downstream of the start pose, one per entry (procedural river only).
+    vessels_on_course_m: tuple[float, ...] = ()
     # Obstacles on the water (docs/quality.md), ours: buoys and anchored vessels taking turns,
     # at first_ahead, first_ahead + spacing, ... metres up the river from the start pose and
     # offset_m either side of its centre line in turn, within LIDAR and radar range, so that
@@ -216,6 +219,17 @@ class VesselConfig(_Frozen):
     collision_clearance_m: Annotated[float, Field(ge=0)] = 0.3
 
 
+class CommandConfig(_Frozen):
+    """Who drives the thrusters (simulator.command): the operator over the autopilot, and
+    zero thrust when commands stop coming (a killed autopilot must not drive on)."""
+
+    # No command for this long -> zero thrust, logged and counted: ten missed ticks of the
+    # 10 Hz autopilot, and of teleop's 10 Hz repeat.
+    timeout_s: Annotated[float, Field(gt=0)] = 1.0
+    # A person's /cmd_wrench holds the autopilot's off this long after the latest one.
+    operator_override_s: Annotated[float, Field(gt=0)] = 5.0
+
+
 class GroundTruthConfig(_Frozen):
     """What the simulator publishes about its scene for judging navigation (docs/quality.md)."""
 
@@ -262,6 +276,7 @@ class SimConfig(_Frozen):
     imu: ImuConfig = ImuConfig()
     gnss: GnssConfig = GnssConfig()
     ground_truth: GroundTruthConfig = GroundTruthConfig()
+    command: CommandConfig = CommandConfig()
 
     @model_validator(mode="before")
     @classmethod

@@ -30,11 +30,14 @@ from clients import RosbridgeClient, Subscription
 from clients.node.links import node_links
 from clients.protocol import Encoding
 from clients.tracing import Tracer
-from schemas.catalogue import TOPICS, Topic, published_by
+from schemas.catalogue import TOPICS, Topic, period_s, published_by
 from schemas.runtime.periodic import every
 from schemas.runtime.process import background_priority
+from schemas.tracing import header_stamp_ns
+from simulator.command import CommandArbiter
 from simulator.config import SimConfig
 from simulator.dynamics import Command, StepResult, VesselDynamics, VesselState
+from simulator.messages import header
 from simulator.scene import Scene, build_scene
 from simulator.sensor import Capture, Generated, Sensor, config_value
 from simulator.sensors import build_sensors, static_transforms
@@ -107,8 +110,9 @@ class SimulatorNode:
         self._clock_ns = clock_ns
         self.dynamics = VesselDynamics(cfg.vessel, scene)
         self.latest_step = StepResult(VesselState.at(scene.start_pose), (0.0, 0.0), 0.0, False)
-        self.command = Command()
-        self.collisions = 0
+        self.commands = CommandArbiter(cfg.command)
+        self.collisions = 0  # physics steps spent against an obstacle
+        self.collision_events = 0  # times the hull met one (a run of such steps is one)
         self.sensors = list(sensors) if sensors is not None else build_sensors(cfg, scene)
         self._physics_sensors = [s for s in self.sensors if s.schedule == "physics"]
         self._workers = [s for s in self.sensors if s.schedule == "worker"]
@@ -135,8 +139,15 @@ class SimulatorNode:
     async def run(self, stop: asyncio.Event) -> None:
         """Advertise, subscribe to commands, run every schedule until `stop`, then clean up."""
         await self._advertise()
-        commands = await self._realtime.subscribe(*TOPICS["cmd_wrench"].pair, maxsize=1)
-        tasks = [asyncio.create_task(self._physics()), asyncio.create_task(self._follow(commands))]
+        operator = await self._realtime.subscribe(*TOPICS["cmd_wrench"].pair, maxsize=1)
+        autopilot = await self._realtime.subscribe(*TOPICS["guidance_cmd"].pair, maxsize=1)
+        await self._realtime.advertise(*TOPICS["sim_status"].pair)
+        tasks = [
+            asyncio.create_task(self._physics()),
+            asyncio.create_task(self._follow(operator)),
+            asyncio.create_task(self._follow(autopilot)),
+            asyncio.create_task(every(period_s("sim_status"), self._publish_status)),
+        ]
         # Stagger the worker sensors over their period so their ray casts rarely overlap.
         for k, sensor in enumerate(self._workers):
             tasks.append(
@@ -194,12 +205,53 @@ class SimulatorNode:
         return self._realtime if topic.role == "realtime" else self._client
 
     async def _follow(self, commands: Subscription) -> None:
-        """Keep the newest `/cmd_wrench` as the actuator command."""
+        """Hand each command to the arbiter: a person's `/cmd_wrench` or the autopilot's
+        stamped `/guidance/cmd_wrench` (simulator.command decides which one drives)."""
+        autopilot = commands.topic == TOPICS["guidance_cmd"].name
         async for received in commands:
             try:
-                self.command = Command.from_wrench(received.msg)
-            except (KeyError, TypeError, ValueError):
-                log.exception("ignoring a malformed %s message", commands.topic)
+                if autopilot:
+                    msg = received.msg
+                    stamp_ns = header_stamp_ns(msg)
+                    if stamp_ns is None:
+                        raise ValueError("no header.stamp")
+                    command = Command.from_wrench(msg["wrench"])
+                    received_ns = self._received_ns(commands.topic, stamp_ns)
+                    self.commands.autopilot(command, stamp_ns, received_ns)
+                else:
+                    self.commands.operator(Command.from_wrench(received.msg), self._clock_ns())
+            except (KeyError, TypeError, ValueError) as exc:
+                log.warning("ignoring a malformed %s message: %s", commands.topic, exc)
+
+    def _received_ns(self, topic: str, stamp_ns: int) -> int:
+        """When `(topic, stamp_ns)` was decoded here (the tracer remembers), else now."""
+        now_ns = self._clock_ns()
+        return now_ns if self._tracer is None else self._tracer.decoded_ns(topic, stamp_ns, now_ns)
+
+    @property
+    def command(self) -> Command:
+        """The command the next physics step applies."""
+        return self.commands.current(self._clock_ns())[0]
+
+    async def _publish_status(self) -> None:
+        """/sim/status: who drives, command timeouts and overrides, collisions."""
+        arbiter = self.commands
+        values = {
+            "source": arbiter.source,
+            "command_timeouts": arbiter.timeouts,
+            "operator_overrides": arbiter.overrides,
+            "collisions": self.collision_events,
+            "collision_steps": self.collisions,
+        }
+        status = {
+            "level": 1 if arbiter.source == "none" else 0,
+            "name": "simulator/command",
+            "message": f"{arbiter.source} commands the vessel",
+            "hardware_id": "",
+            "values": [{"key": k, "value": str(v)} for k, v in values.items()],
+        }
+        msg = {"header": header(self._clock_ns(), ""), "status": [status]}
+        await self._realtime.publish(TOPICS["sim_status"].name, msg)
 
     async def _physics(self) -> None:
         """Step the vessel in real time at the fixed physics rate; publish the physics sensors."""
@@ -227,10 +279,28 @@ class SimulatorNode:
             await asyncio.sleep(max(0.0, start_s + steps_done * dt_s - loop.time()))
 
     def _step(self) -> StepResult:
-        result = self.dynamics.step(self.latest_step.state, self.command)
-        self.latest_step = result
+        now_ns = self._clock_ns()
+        timeouts = self.commands.timeouts
+        command, source = self.commands.current(now_ns)
+        if self.commands.timeouts > timeouts:
+            log.warning(
+                "no command for %.1f s: zero thrust (command timeout %d)",
+                self.cfg.command.timeout_s,
+                self.commands.timeouts,
+            )
+        applied = self.commands.take_applied()
+        if applied is not None and self._tracer is not None:
+            topic = TOPICS["guidance_cmd"].name
+            self._tracer.spans.record(
+                topic, applied.stamp_ns, "actuate", applied.received_ns, now_ns
+            )
+        result = self.dynamics.step(self.latest_step.state, command)
         if result.collided:
             self.collisions += 1
+            if not self.latest_step.collided:
+                self.collision_events += 1
+                log.warning("collision %d (%s driving)", self.collision_events, source)
+        self.latest_step = result
         return result
 
     async def _publish_physics(self, result: StepResult, stamp_ns: int) -> None:

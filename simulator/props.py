@@ -241,3 +241,26 @@ def trees_and_houses(
             objects_of("house", houses, sites, yaws, first_house, on_water=False)
         )
     return Props(parts, objects)
+
+
+def vessels_on_course(
+    cfg: SceneConfig, course: RiverCourse, start_y_m: float, first_id: int = 0
+) -> Props:
+    """Vessels at anchor on the river's centre line, `cfg.vessels_on_course_m` downstream of
+    the start (a guidance scenario: docs/guidance.md). Distances are taken along y, which the
+    gently meandering river follows to within a few per cent."""
+    if not cfg.vessels_on_course_m:
+        return Props([], SceneObjects.empty())
+    y = start_y_m + np.asarray(cfg.vessels_on_course_m, dtype=np.float64)
+    hulls = np.column_stack([course.centre_x_m(y), y, np.full(len(y), course.water_level_m)])
+    yaws = course.heading_rad(y)
+    forward = np.column_stack([np.cos(yaws), np.sin(yaws), np.zeros_like(yaws)])
+    parts = [
+        instanced_part(
+            box_mesh(8.0, 2.6, 1.6, -0.6), materials.VESSEL, hulls, yaws, first_id=first_id
+        ),
+        instanced_part(
+            box_mesh(3.0, 2.0, 1.5, 1.0), materials.VESSEL, hulls + forward, yaws, first_id=first_id
+        ),
+    ]
+    return Props(parts, objects_of("vessel", parts, hulls, yaws, first_id, on_water=True))

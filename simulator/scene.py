@@ -19,7 +19,7 @@ from simulator import materials
 from simulator.config import SceneConfig
 from simulator.frames import Pose2D
 from simulator.objects import WATER, SceneObjects
-from simulator.props import MeshPart, landing_stages, trees_and_houses
+from simulator.props import MeshPart, landing_stages, trees_and_houses, vessels_on_course
 from simulator.terrain import HeightField, heightfield_mesh, load_terrain
 from simulator.valley import generate_valley
 from simulator.water_obstacles import water_obstacles
@@ -169,8 +169,12 @@ def build_scene(cfg: SceneConfig | None = None, *, seed: int = 7) -> Scene:
         afloat = water_obstacles(
             cfg, course, start, first_id=len(stages.objects) + len(rest.objects)
         )
-        parts += stages.parts + rest.parts + afloat.parts
-        objects = stages.objects.concat(rest.objects).concat(afloat.objects)
+        first = len(stages.objects) + len(rest.objects) + len(afloat.objects)
+        anchored = vessels_on_course(cfg, course, start.y_m, first_id=first)
+        parts += stages.parts + rest.parts + afloat.parts + anchored.parts
+        objects = (
+            stages.objects.concat(rest.objects).concat(afloat.objects).concat(anchored.objects)
+        )
     elif cfg.props_on_loaded_terrain:
         log.warning("props need the procedural river course; none placed on loaded terrain")
     scene = Scene(

@@ -11,7 +11,7 @@ from collections.abc import Iterator
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-PACKAGES = ("bridge", "simulator", "navigation", "schemas", "clients")
+PACKAGES = ("bridge", "simulator", "navigation", "schemas", "clients", "guidance")
 # What the message layer (schemas, apart from schemas.runtime) may not touch: it does no I/O,
 # keeps no time and starts no threads; process-level helpers live in schemas.runtime.
 RUNTIME_ONLY = (

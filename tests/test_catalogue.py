@@ -8,6 +8,7 @@ from pydantic import BaseModel
 
 from clients.report.stats import SENSOR_TOPICS
 from clients.stack.launcher import NAVIGATION_TOPICS, SIMULATOR_TOPICS
+from guidance.config import GuidanceConfig
 from navigation.config import LidarConfig, NavigationConfig
 from navigation.node import IMU_INPUT, SENSOR_INPUTS
 from navigation.processors import OUTPUT_TYPES, Processors
@@ -26,7 +27,11 @@ from simulator.config import SimConfig
 from simulator.sensor import config_value
 from simulator.sensors import SENSORS
 
-CONFIGS: dict[str, BaseModel] = {"simulator": SimConfig(), "navigation": NavigationConfig()}
+CONFIGS: dict[str, BaseModel] = {
+    "simulator": SimConfig(),
+    "navigation": NavigationConfig(),
+    "guidance": GuidanceConfig(),
+}
 
 
 def test_keys_and_names_are_unique_and_roles_and_producers_known():
@@ -58,7 +63,7 @@ def test_each_topic_says_how_often_it_comes_one_way():
             assert by_name(topic.follows) is not None, topic.key
 
 
-@pytest.mark.parametrize("producer", ["simulator", "navigation"])
+@pytest.mark.parametrize("producer", ["simulator", "navigation", "guidance"])
 def test_rate_and_switch_keys_exist_in_the_producers_configuration(producer):
     for topic in published_by(producer):
         if topic.rate_key:
@@ -84,7 +89,8 @@ def test_the_simulators_sensors_are_its_catalogue_streams():
         assert topic.role == ("sensor" if factory.schedule == "worker" else "realtime")
         physics = topic.rate_key == "vessel.physics_rate_hz"
         assert physics == (factory.schedule == "physics"), topic.key
-    assert set(SIMULATOR_TOPICS) == {f.topic.name for f in SENSORS}
+    # and /sim/status, who commands the vessel (simulator.command)
+    assert set(SIMULATOR_TOPICS) == {f.topic.name for f in SENSORS} | {TOPICS["sim_status"].name}
 
 
 def test_navigation_reads_and_writes_what_the_catalogue_says():

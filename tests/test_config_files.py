@@ -1,5 +1,6 @@
-"""config/sim.toml and config/nav.toml list every setting of the pydantic models, with its
-default and where it comes from; and nothing else (both directions)."""
+"""config/sim.toml, config/nav.toml and config/guidance.toml list every setting of the
+pydantic models, with its default and where it comes from; and nothing else (both
+directions)."""
 
 from __future__ import annotations
 
@@ -11,11 +12,16 @@ from typing import Any
 import pytest
 from pydantic import BaseModel
 
+from guidance.config import GuidanceConfig
 from navigation.config import NavigationConfig
 from simulator.config import SimConfig
 
 CONFIG = Path(__file__).resolve().parents[1] / "config"
-FILES = [(CONFIG / "sim.toml", SimConfig), (CONFIG / "nav.toml", NavigationConfig)]
+FILES = [
+    (CONFIG / "sim.toml", SimConfig),
+    (CONFIG / "nav.toml", NavigationConfig),
+    (CONFIG / "guidance.toml", GuidanceConfig),
+]
 SETTING = re.compile(r"^# (\[[\w.]+\]|\w+ = )")
 CITED = re.compile(r"#.*#\s*(.*\b(thesis|ours|unset|standard)\b.*)$")
 
@@ -49,7 +55,7 @@ def model_defaults(model: BaseModel, prefix: str = "") -> dict[str, Any]:
     return out
 
 
-@pytest.mark.parametrize(("path", "model"), FILES, ids=["sim", "nav"])
+@pytest.mark.parametrize(("path", "model"), FILES, ids=["sim", "nav", "guidance"])
 def test_the_file_lists_every_setting_and_no_other(path, model):
     listed = set(dotted(tomllib.loads(uncommented(path))))
     fields = set(model_defaults(model()))
@@ -57,7 +63,7 @@ def test_the_file_lists_every_setting_and_no_other(path, model):
     assert not listed - fields, f"not settings of {model.__name__}: {sorted(listed - fields)}"
 
 
-@pytest.mark.parametrize(("path", "model"), FILES, ids=["sim", "nav"])
+@pytest.mark.parametrize(("path", "model"), FILES, ids=["sim", "nav", "guidance"])
 def test_the_listed_values_are_the_defaults(path, model):
     data = tomllib.loads(uncommented(path))
     defaults = model_defaults(model())
@@ -74,7 +80,7 @@ def test_the_listed_values_are_the_defaults(path, model):
     assert model.model_validate(data) == model(), "a listed value differs from the default"
 
 
-@pytest.mark.parametrize(("path", "model"), FILES, ids=["sim", "nav"])
+@pytest.mark.parametrize(("path", "model"), FILES, ids=["sim", "nav", "guidance"])
 def test_every_setting_says_where_it_comes_from(path, model):
     header_cited = False
     for line in path.read_text(encoding="utf-8").splitlines():

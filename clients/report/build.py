@@ -12,7 +12,9 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
+from clients.report.closed_loop import closed_loop
 from clients.report.journeys import SpanRecord, by_topic, hosts_of, journeys, stage_values
+from clients.report.mission import AutopilotSeen, mission
 from clients.report.quality import lidar_quality, pair_by_stamp, radar_quality
 from clients.report.results import DetectionQuality, Machine, ProcessSummary, Run
 from clients.report.sockets import SocketBytes, SocketTraffic, window_traffic
@@ -56,6 +58,7 @@ class Observations:
     report_pid: int = 0
     machine: Machine | None = None
     profile: str | None = None
+    autopilot: AutopilotSeen | None = None
 
 
 def build_run(seen: Observations) -> Run:
@@ -83,6 +86,8 @@ def build_run(seen: Observations) -> Run:
         water_model=water_model,
         point_fields=point_fields,
         thesis_comparison=thesis_comparison(Measured(topics, network)),
+        closed_loop=closed_loop(seen.spans),
+        mission=mission(seen.autopilot) if seen.autopilot is not None else None,
         stage_values={t: stage_values(items) for t, items in grouped.items()},
     )
 
@@ -121,6 +126,16 @@ def simulator_settings(config_msg: Message | None, profile: str | None) -> tuple
         str(lidar.get("water_model", "unknown")),
         str(lidar.get("point_fields", "unknown")),
     )
+
+
+def vessel_hull_m(config_msg: Message | None) -> tuple[float, float]:
+    """The hull's (length, beam) in metres from the simulator's /sim/config, else its
+    defaults (simulator.config.VesselConfig)."""
+    try:
+        vessel = json.loads(config_msg["data"])["vessel"] if config_msg else {}
+        return float(vessel["length_m"]), float(vessel["beam_m"])
+    except (KeyError, TypeError, ValueError):
+        return 7.0, 2.5
 
 
 def describe_sample(topic: str, msg: Message) -> str:

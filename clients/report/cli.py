@@ -83,6 +83,8 @@ async def run_stack(
         encoding=encoding,
         sim_config=sim_config,
         nav_config=args.nav_config,
+        autopilot=args.autopilot,
+        guidance_config=args.guidance_config,
         startup_timeout_s=args.startup_timeout,
     )
     stop = asyncio.Event()
@@ -100,8 +102,9 @@ async def run_stack(
 
     components = stack_components(config)
     if args.replay is not None:  # the recording's sensor topics in the simulator's place
-        bridge, _simulator, navigation = components
-        components = (bridge, player_component(args.replay, args.replay_topics), navigation)
+        bridge, _simulator, navigation, *guidance = components
+        player = player_component(args.replay, args.replay_topics)
+        components = (bridge, player, navigation, *guidance)
     if args.record is not None:
         runs = len(args.encoding) * len(args.profile)
         components += (recorder_component(record_path(args.record, label.replace("/", "-"), runs)),)
@@ -189,6 +192,13 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--plots", type=Path, metavar="DIR", help="write PNG box plots here")
     parser.add_argument("--sim-config", type=_existing_file, metavar="FILE")
     parser.add_argument("--nav-config", type=_existing_file, metavar="FILE")
+    parser.add_argument(
+        "--autopilot",
+        action="store_true",
+        help="also run guidance and control and report the closed loop (perception -> "
+        "actuation per sensor, the control period) and the mission (docs/guidance.md)",
+    )
+    parser.add_argument("--guidance-config", type=_existing_file, metavar="FILE")
     parser.add_argument("--startup-timeout", type=positive_seconds, default=120.0, metavar="S")
     parser.add_argument(
         "--log",

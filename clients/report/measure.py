@@ -17,8 +17,15 @@ from pathlib import Path
 from typing import Any, TextIO
 
 from clients.client import RosbridgeClient
-from clients.report.build import QUALITY_TOPICS, Observations, build_run, describe_sample
+from clients.report.build import (
+    QUALITY_TOPICS,
+    Observations,
+    build_run,
+    describe_sample,
+    vessel_hull_m,
+)
 from clients.report.journeys import spans_of_batch
+from clients.report.mission import AutopilotSeen
 from clients.report.results import Machine, Run
 from clients.report.sockets import SS_COMMAND, SocketBytes, parse_ss
 from clients.report.stats import loopback_tx_bytes
@@ -40,6 +47,14 @@ from schemas.tracing import (
 TAIL_S = 2.5
 SAMPLE_TYPES = {t.name: t.type for t in TOPICS.values() if t.thesis_sensor}
 SIM_CONFIG = TOPICS["sim_config"].pair
+# What the mission figures read (clients.report.mission): the vessel's track (10 Hz is plenty
+# for clearance and cross-track), the route, the scene's objects and the simulator's counters.
+AUTOPILOT_TOPICS: dict[str, dict[str, Any]] = {
+    "odom": {"maxsize": 100_000, "throttle_rate": 100},
+    "guidance_path": {"maxsize": 1},
+    "ground_truth": {"maxsize": 1},
+    "sim_status": {"maxsize": 10_000},
+}
 
 
 class Progress:
@@ -125,8 +140,12 @@ async def measure(
             for key, (topic, type_name) in QUALITY_TOPICS.items()
         }
         sim_config = await client.subscribe(*SIM_CONFIG, maxsize=1)
+        autopilot = {
+            key: await client.subscribe(*TOPICS[key].pair, **options)
+            for key, options in AUTOPILOT_TOPICS.items()
+        }
         await _wait(warmup_s, f"{label} warm-up", progress)
-        for sub in quality.values():
+        for sub in (*quality.values(), autopilot["odom"], autopilot["sim_status"]):
             _drain(sub)  # judge only what falls in the window
         start_ns, lo_start, ss_start = time.time_ns(), read_loopback(), await read_sockets()
         await _wait(duration_s, f"{label} measuring", progress)
@@ -141,6 +160,7 @@ async def measure(
             if start_ns <= s.stamp_ns <= end_ns
         ]
         config = _drain(sim_config)
+        watched = {key: _drain(sub) for key, sub in autopilot.items()}
         seen = Observations(
             encoding=encoding,
             duration_s=(end_ns - start_ns) / NS_PER_S,
@@ -158,8 +178,28 @@ async def measure(
             report_pid=os.getpid(),
             machine=Machine(os.cpu_count(), load),
             profile=profile,
+            autopilot=autopilot_seen(watched, start_ns, end_ns, config[-1] if config else None),
         )
     return build_run(seen)
+
+
+def autopilot_seen(
+    watched: dict[str, list[dict[str, Any]]],
+    start_ns: int,
+    end_ns: int,
+    sim_config: dict[str, Any] | None,
+) -> AutopilotSeen | None:
+    """What the window saw of an autopilot; None when no guidance published its route."""
+    if not watched["guidance_path"]:
+        return None
+    truth = watched["ground_truth"]
+    return AutopilotSeen(
+        odometry=_in_window(watched["odom"], start_ns, end_ns),
+        path=watched["guidance_path"][-1],
+        ground_truth=truth[-1] if truth else None,
+        status=_in_window(watched["sim_status"], start_ns, end_ns),
+        hull_m=vessel_hull_m(sim_config),
+    )
 
 
 def _drain(sub: Subscription) -> list[dict[str, Any]]:

@@ -298,6 +298,47 @@ class ThesisRow:
 
 
 @dataclass(frozen=True)
+class Latency:
+    """Durations (ms) of one quantity: mean and percentiles (numpy, linear), and how many."""
+
+    mean: float = math.nan
+    p50: float = math.nan
+    p99: float = math.nan
+    max: float = math.nan
+    n: int = field(default=0, metadata=JSON_NONE)
+
+
+@dataclass(frozen=True)
+class ClosedLoop:
+    """Perception -> actuation with an autopilot (docs/guidance.md), per sensor topic.
+
+    perception_to_actuation_ms : sensor topic -> scan stamp (capture) -> the first command
+    that used navigation's result of it, applied by the simulator's physics.
+    hops_ms : sensor topic -> hop -> mean ms: `navigation` (capture -> result ready),
+    `to_guidance` (-> guidance decoded it), `guidance` (-> its command published),
+    `to_actuation` (-> the simulator applied the command).
+    control_period_ms / control_jitter_ms : spacing of guidance's command stamps, and its
+    standard deviation.
+    """
+
+    perception_to_actuation_ms: Mapping[str, Latency]
+    hops_ms: Mapping[str, Mapping[str, float]]
+    control_period_ms: Latency
+    control_jitter_ms: float
+    commands: int
+
+
+@dataclass(frozen=True)
+class Mission:
+    """How the run went, from the simulator's ground truth (clients.report.mission)."""
+
+    distance_m: float
+    cross_track_rms_m: float
+    min_clearance_m: float
+    collisions: int
+
+
+@dataclass(frozen=True)
 class Run:
     """Everything the report says about one run (one payload profile and encoding).
 
@@ -321,6 +362,8 @@ class Run:
     water_model: str = "unknown"
     point_fields: str = "unknown"
     thesis_comparison: tuple[ThesisRow, ...] = ()
+    closed_loop: ClosedLoop | None = field(default=None, metadata=OMIT_NONE)
+    mission: Mission | None = field(default=None, metadata=OMIT_NONE)
     stage_values: Mapping[str, Mapping[str, list[float]]] = field(
         default_factory=dict, metadata=JSON_NONE
     )

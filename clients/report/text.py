@@ -15,13 +15,17 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import NamedTuple
 
+from clients.report.closed_loop import HOPS
 from clients.report.journeys import RESULT, TRANSPORT, stage_order
 from clients.report.quality import TARGET_PRECISION, TARGET_RECALL, shortfalls
 from clients.report.results import (
     THESIS_NETWORK,
     ClassQuality,
+    ClosedLoop,
     DetectionQuality,
+    Latency,
     LidarQuality,
+    Mission,
     NetworkSummary,
     ProcessSummary,
     RadarQuality,
@@ -43,6 +47,10 @@ from clients.report.table import (
     text_column,
 )
 from clients.report.thesis import FIGURES
+
+
+def _hop(hop: str) -> Callable[[LoopLine], float | None]:
+    return lambda line: line.hops.get(hop)
 
 
 class TopicLine(NamedTuple):
@@ -191,7 +199,57 @@ def render_run(run: Run) -> str:
     if run.thesis_comparison:
         lines.append("  beside the thesis (same statistic; docs/report.md):")
         lines += render_table(THESIS_COLUMNS, run.thesis_comparison)
+    if run.closed_loop is not None:
+        lines += _closed_loop_lines(run.closed_loop)
+    if run.mission is not None:
+        lines += _mission_lines(run.mission)
     return "\n".join(lines)
+
+
+class LoopLine(NamedTuple):
+    topic: str
+    total: Latency
+    hops: dict[str, float]
+
+
+LOOP_COLUMNS: list[Column[LoopLine]] = [
+    text_column("sensor", "topic"),
+    Column("n", "total.n", str),
+    *(
+        Column(statistic, f"total.{statistic}", fmt_ms, "ms")
+        for statistic in ("mean", "p50", "p99", "max")
+    ),
+    *(Column(hop, _hop(hop), fmt_ms, "ms") for hop in HOPS),
+]
+
+
+def _closed_loop_lines(loop: ClosedLoop) -> list[str]:
+    period = loop.control_period_ms
+    lines = [
+        "  closed loop (docs/guidance.md): perception -> actuation, scan capture -> the first "
+        "command using it applied by the simulator; hop columns are means",
+    ]
+    lines += render_table(
+        LOOP_COLUMNS,
+        [
+            LoopLine(topic, total, dict(loop.hops_ms.get(topic, {})))
+            for topic, total in loop.perception_to_actuation_ms.items()
+        ],
+    )
+    lines.append(
+        f"  control loop: {loop.commands} commands, period mean {fmt_ms(period.mean)} ms "
+        f"(p99 {fmt_ms(period.p99)}, max {fmt_ms(period.max)}), jitter (std) "
+        f"{fmt_ms(loop.control_jitter_ms)} ms"
+    )
+    return lines
+
+
+def _mission_lines(mission: Mission) -> list[str]:
+    return [
+        f"  mission (simulator ground truth): {mission.distance_m:.1f} m travelled, "
+        f"cross-track RMS {mission.cross_track_rms_m:.2f} m, least clearance "
+        f"{mission.min_clearance_m:.1f} m, {mission.collisions} collisions"
+    ]
 
 
 def _network_lines(network: NetworkSummary) -> list[str]:

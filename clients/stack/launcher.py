@@ -58,6 +58,7 @@ T = TypeVar("T")
 # Ready when these have publishers: what each always streams (schemas.catalogue).
 SIMULATOR_TOPICS = streams_of("simulator")
 NAVIGATION_TOPICS = streams_of("navigation")
+GUIDANCE_TOPICS = streams_of("guidance")
 
 _POLL_S = 0.25  # readiness probe period: cheap (one rosapi round trip per topic)
 _WILDCARD_TO_LOOPBACK = {"0.0.0.0": "127.0.0.1", "": "127.0.0.1", "::": "::1"}
@@ -74,6 +75,9 @@ class LaunchConfig(BaseModel):
     encoding: Literal["json", "cbor"] = "cbor"  # binary frames: ~30x cheaper for a scan
     sim_config: Path | None = None
     nav_config: Path | None = None
+    # `up --autopilot`: guidance and control as a fourth process (docs/guidance.md)
+    autopilot: bool = False
+    guidance_config: Path | None = None
     # A loaded 2-core machine needs tens of seconds to import the stack and build the
     # ~500k-triangle scene.
     startup_timeout_s: float = Field(default=120.0, gt=0)
@@ -95,13 +99,21 @@ class LaunchConfig(BaseModel):
 
 
 def stack_components(config: LaunchConfig) -> tuple[Component, ...]:
-    """The bridge, the simulator and the navigation service for ``config``, in start order."""
+    """The bridge, the simulator and the navigation service (and with ``autopilot``,
+    guidance) for ``config``, in start order."""
     sim_args = ["--bridge", BRIDGE_URL, "--encoding", config.encoding]
-    nav_args = list(sim_args)
+    nav_args, guide_args = list(sim_args), list(sim_args)
     if config.sim_config is not None:
         sim_args += ["--config", str(config.sim_config)]
     if config.nav_config is not None:
         nav_args += ["--config", str(config.nav_config)]
+    if config.guidance_config is not None:
+        guide_args += ["--config", str(config.guidance_config)]
+    guidance = (
+        (Component("guide", "guidance", "guidance", tuple(guide_args), GUIDANCE_TOPICS),)
+        if config.autopilot
+        else ()
+    )
     return (
         Component(
             "bridge",
@@ -117,6 +129,7 @@ def stack_components(config: LaunchConfig) -> tuple[Component, ...]:
         ),
         Component("sim", "simulator", "simulator", tuple(sim_args), SIMULATOR_TOPICS),
         Component("nav", "navigation", "navigation", tuple(nav_args), NAVIGATION_TOPICS),
+        *guidance,
     )
 
 

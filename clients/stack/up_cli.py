@@ -107,6 +107,14 @@ def build_parser() -> argparse.ArgumentParser:
         "--nav-config", type=_toml_file, metavar="FILE", help="navigation TOML configuration"
     )
     parser.add_argument(
+        "--autopilot",
+        action="store_true",
+        help="also run guidance and control, which steers the vessel (docs/guidance.md)",
+    )
+    parser.add_argument(
+        "--guidance-config", type=_toml_file, metavar="FILE", help="guidance TOML configuration"
+    )
+    parser.add_argument(
         "--startup-timeout",
         type=positive_seconds,
         default=defaults.startup_timeout_s,
@@ -151,6 +159,8 @@ def config_from_args(args: argparse.Namespace) -> LaunchConfig:
         encoding=args.encoding,
         sim_config=args.sim_config,
         nav_config=args.nav_config,
+        autopilot=args.autopilot,
+        guidance_config=args.guidance_config,
         startup_timeout_s=args.startup_timeout,
         stop_timeout_s=args.stop_timeout,
         restart=args.restart,
@@ -168,8 +178,10 @@ async def _supervise(
     for sig in STOP_SIGNALS:
         loop.add_signal_handler(sig, stop.set)
 
+    parts = "four" if config.autopilot else "three"
+
     def announce(url: str) -> None:
-        output.write("up", f"all three ready; connect to {url} (Ctrl-C stops)")
+        output.write("up", f"all {parts} ready; connect to {url} (Ctrl-C stops)")
 
     try:
         supervisor = Supervisor(stack_components(config) + extra, config, output, on_ready=announce)

@@ -18,6 +18,7 @@ from typing import Literal
 import pytest
 
 from clients.stack.launcher import (
+    GUIDANCE_TOPICS,
     MALLOC_ENV,
     NAVIGATION_TOPICS,
     SIMULATOR_TOPICS,
@@ -96,9 +97,11 @@ def expected_commands(encoding: Literal["json", "cbor"]) -> dict[str, list[str]]
         encoding=encoding,
         sim_config=Path("/config/sim.toml"),
         nav_config=Path("/config/nav.toml"),
+        autopilot=True,  # the compose profile "autopilot"
+        guidance_config=Path("/config/guidance.toml"),
     )
-    bridge, sim, nav = stack_components(config)
-    commands = {"bridge": bridge, "simulator": sim, "navigation": nav}
+    bridge, sim, nav, guide = stack_components(config)
+    commands = {"bridge": bridge, "simulator": sim, "navigation": nav, "guidance": guide}
     return {name: ["python", *c.argv("ws://bridge:9090")[1:]] for name, c in commands.items()}
 
 
@@ -109,18 +112,23 @@ def test_services_run_the_same_command_lines_as_up(encoding: Literal["json", "cb
 
 
 def test_services_restart_wait_for_a_healthy_bridge_and_read_mounted_config() -> None:
-    assert set(SERVICES) == {"bridge", "simulator", "navigation"}
+    assert set(SERVICES) == {"bridge", "simulator", "navigation", "guidance"}
     for name, service in SERVICES.items():
         assert service["restart"] == "unless-stopped", name
         assert "./config:/config:ro" in service["volumes"], name
         assert service["healthcheck"]["test"][0] == "CMD", name
-    for name in ("simulator", "navigation"):
+    assert SERVICES["guidance"]["profiles"] == ["autopilot"]  # only when asked for
+    for name in ("simulator", "navigation", "guidance"):
         assert SERVICES[name]["depends_on"] == {"bridge": {"condition": "service_healthy"}}
     assert SERVICES["bridge"]["ports"] == ["9090:9090"]
 
 
 def test_health_checks_require_every_published_topic() -> None:
-    for name, topics in (("simulator", SIMULATOR_TOPICS), ("navigation", NAVIGATION_TOPICS)):
+    for name, topics in (
+        ("simulator", SIMULATOR_TOPICS),
+        ("navigation", NAVIGATION_TOPICS),
+        ("guidance", GUIDANCE_TOPICS),
+    ):
         words = healthcheck_command(SERVICES[name])
         required = {words[i + 1] for i, word in enumerate(words) if word == "--topic"}
         assert required == set(topics), name
@@ -193,6 +201,10 @@ def test_shipped_example_configs_load_as_the_defaults() -> None:
 
     assert load_sim(REPO_ROOT / "config" / "sim.toml") == SimConfig()
     assert load_nav(REPO_ROOT / "config" / "nav.toml") == NavigationConfig()
+    from guidance.config import GuidanceConfig
+    from guidance.config import load_config as load_guidance
+
+    assert load_guidance(REPO_ROOT / "config" / "guidance.toml") == GuidanceConfig()
 
 
 def wait_healthy(

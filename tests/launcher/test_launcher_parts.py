@@ -13,6 +13,7 @@ from clients.node.child import BRIDGE_URL, describe_exit
 from clients.node.output import PrefixedOutput
 from clients.stack.healthcheck import version_url
 from clients.stack.launcher import (
+    GUIDANCE_TOPICS,
     NAVIGATION_TOPICS,
     SIMULATOR_TOPICS,
     LaunchConfig,
@@ -73,6 +74,28 @@ def test_without_config_files_no_config_option_is_passed() -> None:
     assert BRIDGE_URL in sim.args and BRIDGE_URL in nav.args
 
 
+def test_autopilot_adds_guidance_last_with_its_config() -> None:
+    config = LaunchConfig(autopilot=True, guidance_config=Path("/c/guidance.toml"))
+    *_, guide = stack_components(config)
+    assert guide.argv("ws://h:1") == [
+        sys.executable,
+        "-m",
+        "guidance",
+        "--bridge",
+        "ws://h:1",
+        "--encoding",
+        "cbor",
+        "--config",
+        "/c/guidance.toml",
+    ]
+    assert (
+        guide.topics
+        == GUIDANCE_TOPICS
+        == ("/guidance/cmd_wrench", "/guidance/target", "/guidance/mode")
+    )
+    assert len(stack_components(LaunchConfig())) == 3
+
+
 def test_children_get_unbuffered_output_and_malloc_tuning_over_the_base_env() -> None:
     env = child_environment({"PATH": "/bin", "PYTHONUNBUFFERED": "", "MALLOC_TOP_PAD_": "1"})
     assert env["PATH"] == "/bin"
@@ -127,9 +150,11 @@ def test_output_prefixes_each_line_and_colours_only_when_asked() -> None:
 
 def test_readiness_topics_are_what_the_components_publish() -> None:
     """The launcher and the components read one catalogue (schemas.catalogue): `up` waits for
-    every sensor topic of the simulator and every output of navigation."""
+    every sensor topic of the simulator (and its /sim/status) and every output of navigation."""
     from navigation.processors import OUTPUT_TYPES
+    from schemas.catalogue import TOPICS
     from simulator.sensors import SENSORS
 
-    assert set(SIMULATOR_TOPICS) == {factory.topic.name for factory in SENSORS}
+    sensors = {factory.topic.name for factory in SENSORS}
+    assert set(SIMULATOR_TOPICS) == sensors | {TOPICS["sim_status"].name}
     assert set(NAVIGATION_TOPICS) == set(OUTPUT_TYPES)

@@ -66,6 +66,7 @@ export const COLORS = {
   box: "#ffb74d",
   radar: "#ff5252",
   occupied: [239, 83, 80],
+  path: "#7fdbff", // the autopilot's route
   vessel: "#e0f7fa",
   series: ["#ef5350", "#66bb6a", "#42a5f5"],
 };

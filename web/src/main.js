@@ -22,7 +22,8 @@ import { ArrivalAges, TraceStats } from "./trace.js";
 // ms) allows. queue_length 1 makes the bridge drop stale messages for a slow page instead of
 // queueing. The LIDAR's 2.9 MB scans are decoded and decimated in a worker (LIDAR).
 const THROTTLE_MS = { radar: 250, camera: 100, imu: 10, odom: 50, tf_static: 0, boxes: 100,
-  radar_detections: 100, lines: 100, obstacle_map: 250, trace: 0, process_stats: 0, restarts: 0 };
+  radar_detections: 100, lines: 100, obstacle_map: 250, trace: 0, process_stats: 0, restarts: 0,
+  guidance_path: 0, guidance_mode: 0 };
 const LIDAR = { topic: topic("lidar").name, messageType: topic("lidar").type,
   throttleMs: 250, maxPoints: 40000 }; // 40k of a ~180k scan: more adds no visible detail
 const SUBSCRIPTIONS = DASHBOARD_TOPICS.filter((t) => t.name !== LIDAR.topic);
@@ -52,7 +53,7 @@ function startDashboard() {
     latency: new LatencyPanel(document.getElementById("latency"), trace, ages),
     topics: new TopicsPanel(document.getElementById("topics"), connection, rates),
   };
-  const vessel = { yawRad: NaN, speedMps: NaN, stampMs: NaN };
+  const vessel = { xM: NaN, yM: NaN, yawRad: NaN, speedMps: NaN, stampMs: NaN };
   const handlers = messageHandlers(panels, trace, vessel);
   const received = (topic, handle) => {
     const now = performance.now();
@@ -96,7 +97,10 @@ function messageHandlers(panels, trace, vessel) {
     radar: (m) => panels.radar.onImage(m),
     camera: (m) => panels.camera.onImage(m),
     imu: (m, now) => panels.imu.onImu(m, now),
-    odom: (m) => Object.assign(vessel, odometryReadout(m)),
+    odom: (m) => {
+      Object.assign(vessel, odometryReadout(m));
+      panels.map.onPose(vessel);
+    },
     tf_static: (m) => panels.map.onStaticTf(m),
     boxes: (m) => panels.map.onBoxes(m),
     radar_detections: (m) => {
@@ -108,7 +112,17 @@ function messageHandlers(panels, trace, vessel) {
     trace: (m) => trace.onSpans(m),
     process_stats: (m) => panels.topics.onProcessStats(m),
     restarts: (m) => panels.topics.onRestarts(m),
+    guidance_path: (m) => panels.map.onPath(m),
+    guidance_mode: (m) => showMode(m.data),
   };
+}
+
+/** The autopilot's mode in the header (docs/guidance.md: follow, avoid, blocked, stale, stop,
+ * manual); the keyboard overrides it for a few seconds. */
+function showMode(mode) {
+  const readout = document.getElementById("autopilot");
+  readout.textContent = `autopilot: ${mode}`;
+  readout.classList.toggle("active", mode === "follow" || mode === "avoid");
 }
 
 function showCommand(surge, yaw, active) {
@@ -121,7 +135,10 @@ function showCommand(surge, yaw, active) {
 
 function odometryReadout(odometry) {
   const v = odometry.twist.twist.linear;
+  const p = odometry.pose.pose.position;
   return {
+    xM: p.x,
+    yM: p.y,
     yawRad: yawOf(odometry.pose.pose.orientation),
     speedMps: Math.hypot(v.x, v.y),
     stampMs: stampMs(odometry.header),

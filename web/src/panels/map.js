@@ -1,5 +1,6 @@
 // Top-down map around the vessel (thesis figures 16, 19, 21 as one live picture): LIDAR points
-// coloured by height, LIDAR cluster boxes, radar CFAR detections and the fused obstacle grid.
+// coloured by height, LIDAR cluster boxes, radar CFAR detections and the fused obstacle grid,
+// and the autopilot's route (/guidance/path, map frame, turned into the vessel frame by /odom).
 // Vessel frame, bow up; sensor mounts come from /tf_static. Layers are rebuilt only when their
 // message arrives; a frame just composites them. The LIDAR layer arrives as a finished bitmap
 // from the LIDAR worker, which is told the view (`onView`) whenever it changes.
@@ -21,6 +22,8 @@ export class MapPanel {
     this.boxes = [];
     this.detections = [];
     this.grid = null; // {image: canvas, pixels: ImageData, resolution, origin: [x_m, y_m]}
+    this.path = []; // the autopilot's route, [x_m, y_m] in the map frame
+    this.pose = null; // the vessel's {xM, yM, yawRad} in the map frame
     this.raster = document.createElement("canvas"); // background, rings, grid and points
     this.rasterStale = true;
     this.dirty = true;
@@ -66,6 +69,16 @@ export class MapPanel {
     this.dirty = true;
   }
 
+  onPath(message) {
+    this.path = (message.poses ?? []).map((p) => [p.pose.position.x, p.pose.position.y]);
+    this.dirty = true;
+  }
+
+  onPose({ xM, yM, yawRad }) {
+    this.pose = { xM, yM, yawRad };
+    if (this.path.length) this.dirty = true; // the route moves under the vessel
+  }
+
   onGrid(message) {
     const { width, height, resolution, origin } = message.info;
     let image = this.grid?.image;
@@ -101,6 +114,7 @@ export class MapPanel {
       this.rasterStale = false;
     }
     ctx.drawImage(this.raster, 0, 0, width, height);
+    this.#drawPath(ctx, view);
     this.#drawBoxes(ctx, view);
     this.#drawDetections(ctx, view);
     this.#drawVessel(ctx, view);
@@ -162,6 +176,26 @@ export class MapPanel {
     ctx.restore();
   }
 
+  /** The route in the vessel frame: map point minus the vessel's position, turned by -yaw. */
+  #drawPath(ctx, { cx, cy, scale }) {
+    if (this.path.length < 2 || !this.pose || !Number.isFinite(this.pose.yawRad)) return;
+    const { xM, yM, yawRad } = this.pose;
+    const [c, s] = [Math.cos(yawRad), Math.sin(yawRad)];
+    ctx.strokeStyle = COLORS.path;
+    ctx.lineWidth = 2;
+    ctx.setLineDash([6, 4]);
+    ctx.beginPath();
+    this.path.forEach(([x, y], i) => {
+      const [dx, dy] = [x - xM, y - yM];
+      const [ahead, left] = [c * dx + s * dy, -s * dx + c * dy];
+      const [u, v] = [cx - left * scale, cy - ahead * scale];
+      if (i === 0) ctx.moveTo(u, v);
+      else ctx.lineTo(u, v);
+    });
+    ctx.stroke();
+    ctx.setLineDash([]);
+  }
+
   #drawBoxes(ctx, { cx, cy, scale }) {
     ctx.strokeStyle = COLORS.box;
     ctx.lineWidth = 1.5;
@@ -197,7 +231,7 @@ export class MapPanel {
 
   #drawLegend(ctx, width, height) {
     const items = [["LIDAR (by height)", "#b4e05a"], ["water returns", "#183458"], ["boxes", COLORS.box], ["radar", COLORS.radar],
-      ["obstacle grid", `rgb(${COLORS.occupied.join(",")})`]];
+      ["obstacle grid", `rgb(${COLORS.occupied.join(",")})`], ["route", COLORS.path]];
     ctx.font = "11px system-ui, sans-serif";
     let x = 10;
     const y = height - 10;
