@@ -9,7 +9,7 @@ sample stamped after the kill reaches the client), beside the target (IMU back w
 the issue's bound) and the machine's load. tests/launcher/test_up_stack.py checks that the
 stack recovers at all; this is where the time is measured.
 
-Usage: python benchmarks/recovery.py [--rounds 3] [--settle 5]
+Usage: python -m benchmarks.recovery [--rounds 3] [--settle 5]
 """
 
 from __future__ import annotations
@@ -25,10 +25,9 @@ import sys
 import time
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path[:0] = [str(ROOT)]
+from clients import RosbridgeClient
 
-from clients import RosbridgeClient  # noqa: E402
+ROOT = Path(__file__).resolve().parents[1]
 
 CONNECT = re.compile(r"connect to (ws://[\d.]+:\d+)")
 STARTED = re.compile(r"\[up\]\s+started (\w+) \(pid (\d+)\)")
