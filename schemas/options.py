@@ -12,13 +12,13 @@ checked as the text is read, so a bad value is named with its option and argpars
 from __future__ import annotations
 
 import argparse
+import operator
 import types
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal, Union, get_args, get_origin
 
-from annotated_types import Ge, Gt, Le, Lt
 from pydantic import BaseModel, ValidationError
 from pydantic.fields import FieldInfo
 
@@ -130,24 +130,24 @@ class SpelledOption:
         return f"{self.option.help} ({'; '.join(notes)})" if notes else self.option.help
 
 
+# pydantic keeps a field's bounds as annotated_types' Gt, Ge, Lt, Le objects in its metadata.
+_COMPARE: dict[str, Callable[[Any, Any], bool]] = {
+    "Gt": operator.gt,
+    "Ge": operator.ge,
+    "Lt": operator.lt,
+    "Le": operator.le,
+}
+
+
 def _limit(bound: object) -> object:
     """The number of a Gt/Ge/Lt/Le bound, None for other metadata."""
-    for kind, attribute in ((Gt, "gt"), (Ge, "ge"), (Lt, "lt"), (Le, "le")):
-        if isinstance(bound, kind):
-            return getattr(bound, attribute)
-    return None
+    kind = type(bound).__name__
+    return getattr(bound, kind.lower(), None) if kind in _COMPARE else None
 
 
 def _within(bound: object, value: float) -> bool:
-    if isinstance(bound, Gt):
-        return bool(value > bound.gt)  # type: ignore[operator]
-    if isinstance(bound, Ge):
-        return bool(value >= bound.ge)  # type: ignore[operator]
-    if isinstance(bound, Lt):
-        return bool(value < bound.lt)  # type: ignore[operator]
-    if isinstance(bound, Le):
-        return bool(value <= bound.le)  # type: ignore[operator]
-    return True
+    kind = type(bound).__name__
+    return kind not in _COMPARE or _COMPARE[kind](value, _limit(bound))
 
 
 def _switch_text(text: str) -> bool:
