@@ -8,6 +8,12 @@ and CBOR next to ``schemas.frames.publish_*`` of the same message (what the brid
 Then, inbound, ``ClientProtocol.receive`` of each op a server sends (decode, reading into its
 `schemas.ops` model, routing) next to ``codec_json.loads`` of the same frame.
 Run as ``python -m benchmarks.client_ops``; medians hold up on a loaded machine, ratios more so.
+
+Inbound ops read into their models (house-typed, 2026-11-26; load 6-11, median of three runs
+interleaved with the code before, µs): an Imu publish 10.6 -> 12.5 untyped, 38.8 -> 44.1 typed
+(``parse_publish`` ~0.75 µs of CPU time against ~0.2 for the two dict reads it replaced; the
+rest is noise: the unchanged outbound ops moved 0.91-1.13x in the same runs); control ops
+(service_response, action_result, ...) 2-7 -> 10-15, pydantic validating each.
 """
 
 from __future__ import annotations
