@@ -30,6 +30,13 @@ SUBCOMMANDS: dict[str, tuple[str, str]] = {
 }
 
 
+# What the extras (pyproject `[project.optional-dependencies]`) add, and the extra each command
+# needs: a light install (`pip install riverbridge`) runs the bridge, record and play, and a
+# command that needs more says which extra to install instead of a traceback.
+EXTRA_LIBRARIES = {"trimesh", "embreex", "cv2", "sklearn", "scipy", "matplotlib"}
+EXTRA_OF_COMMAND = {"sim": "sim", "teleop": "sim", "nav": "nav", "up": "sim,nav", "report": "all"}
+
+
 def _usage() -> str:
     lines = ["usage: riverbridge <command> [options]", "", "commands:"]
     lines += [f"  {name:<8} {help_text}" for name, (_, help_text) in SUBCOMMANDS.items()]
@@ -46,7 +53,18 @@ def main(argv: list[str] | None = None) -> int:
     if command not in SUBCOMMANDS:
         print(f"riverbridge: unknown command {command!r}\n\n{_usage()}", file=sys.stderr)
         return 2
-    module = importlib.import_module(SUBCOMMANDS[command][0])
+    try:
+        module = importlib.import_module(SUBCOMMANDS[command][0])
+    except ModuleNotFoundError as exc:
+        if (exc.name or "").split(".")[0] not in EXTRA_LIBRARIES:
+            raise
+        extra = EXTRA_OF_COMMAND.get(command, "all")
+        print(
+            f"riverbridge {command} needs {exc.name}, which this install lacks: "
+            f"pip install 'riverbridge[{extra}]'",
+            file=sys.stderr,
+        )
+        return 2
     return int(module.main(rest))
 
 

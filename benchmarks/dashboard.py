@@ -16,69 +16,31 @@ from __future__ import annotations
 import argparse
 import contextlib
 import json
-import os
-import re
-import signal
 import subprocess
 import sys
 import tempfile
-import time
 from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
 
-REPO_ROOT = Path(__file__).resolve().parents[1]
+from tests.child_process import REPO_ROOT
+from tests.dashboard.stack import running_stack
+
 MEASURE_SCRIPT = REPO_ROOT / "web" / "scripts" / "measure_frames.mjs"
-FRAME_BUDGET_MS = 50.0  # issue 6: no frame over 50 ms on a full-rate stack
-STARTUP_TIMEOUT_S = 180.0
 MIB = 1024 * 1024
-_READY = re.compile(r"all three ready; connect to ws://(?P<address>[\d.]+:\d+)")
+FRAME_BUDGET_MS = 50.0  # issue 6: no frame over 50 ms on a full-rate stack
 
 
 @contextlib.contextmanager
 def started_stack() -> Iterator[str]:
-    """Run bridge, simulator and navigation; yield the dashboard's URL; stop them after."""
-    with tempfile.TemporaryDirectory(prefix="riverbridge-up-") as folder:
-        log_path = Path(folder) / "up.log"
-        with log_path.open("w") as log:
-            process = subprocess.Popen(
-                [sys.executable, "-m", "clients.stack.up_cli", "--port", "0"],
-                cwd=REPO_ROOT,
-                env=stack_env(),
-                stdin=subprocess.DEVNULL,
-                stdout=log,
-                stderr=subprocess.STDOUT,
-                start_new_session=True,
-            )
-        try:
-            yield wait_ready(process, log_path)
-        finally:
-            stop(process)
-
-
-def stack_env() -> dict[str, str]:
-    env = dict(os.environ)
-    env["PYTHONPATH"] = os.pathsep.join(filter(None, [str(REPO_ROOT), env.get("PYTHONPATH")]))
-    return env
-
-
-def wait_ready(process: subprocess.Popen[bytes], log_path: Path) -> str:
-    deadline = time.monotonic() + STARTUP_TIMEOUT_S
-    while (match := _READY.search(log_path.read_text())) is None:
-        if process.poll() is not None or time.monotonic() > deadline:
-            raise RuntimeError(f"riverbridge up did not start:\n{log_path.read_text()}")
-        time.sleep(0.2)
-    return f"http://{match['address']}/"
-
-
-def stop(process: subprocess.Popen[bytes]) -> None:
-    process.send_signal(signal.SIGINT)
-    try:
-        process.wait(30)
-    except subprocess.TimeoutExpired:
-        os.killpg(process.pid, signal.SIGKILL)
-        process.wait()
+    """Run bridge, simulator and navigation (as the dashboard's browser tests do); yield the
+    dashboard's URL; stop them after."""
+    with (
+        tempfile.TemporaryDirectory(prefix="riverbridge-up-") as folder,
+        running_stack(Path(folder) / "up.log") as stack,
+    ):
+        yield stack.page_url
 
 
 def measure(url: str, seconds: float) -> dict:

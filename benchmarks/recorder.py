@@ -36,6 +36,7 @@ import numpy as np
 from mcap.reader import make_reader
 
 from clients import RosbridgeClient
+from schemas.message import ns_to_stamp
 from schemas.tracing import STATS_SERVICE, STATS_SERVICE_TYPE
 
 SCAN_POINTS = 345_600  # Table 4.3: 1440 x 240 beams, x, y, z, intensity float32
@@ -119,30 +120,18 @@ async def publish_scans(url: str, scan_hz: float, stop_at: asyncio.Event) -> Non
 
         async def imu_loop() -> None:
             while not stop_at.is_set():
-                now = time.time_ns()
-                await imu.publish(
-                    "/imu/data",
-                    {
-                        "header": {
-                            "stamp": {"sec": now // NS_PER_S, "nanosec": now % NS_PER_S},
-                            "frame_id": "imu",
-                        }
-                    },
-                )
+                stamp = ns_to_stamp(time.time_ns())
+                await imu.publish("/imu/data", {"header": {"stamp": stamp, "frame_id": "imu"}})
                 await asyncio.sleep(0.01)
 
         task = asyncio.create_task(imu_loop())
         loop = asyncio.get_running_loop()
         next_s = loop.time()
         while not stop_at.is_set():
-            now = time.time_ns()
             await scans.publish(
                 "/lidar/points",
                 {
-                    "header": {
-                        "stamp": {"sec": now // NS_PER_S, "nanosec": now % NS_PER_S},
-                        "frame_id": "lidar",
-                    },
+                    "header": {"stamp": ns_to_stamp(time.time_ns()), "frame_id": "lidar"},
                     "height": 1,
                     "width": SCAN_POINTS,
                     "fields": fields,

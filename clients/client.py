@@ -420,7 +420,7 @@ class RosbridgeClient:
 
     async def _encode(self, topic: str, msg: dict[str, Any]) -> Frame:
         """Encode a publish, on the encode thread when its payload is large."""
-        if payload_bytes(msg, count_text=True) < self._offload_bytes:
+        if payload_bytes(msg) < self._offload_bytes:
             return self._protocol.encode_publish(topic, msg)
         loop = asyncio.get_running_loop()
         try:

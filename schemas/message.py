@@ -390,22 +390,20 @@ def default_message(spec: MessageSpec) -> Message:
     return {field.name: _fresh_default(field) for field in spec.fields}
 
 
-def payload_bytes(value: Any, count_text: bool = False) -> int:
-    """Rough byte count of the bulk data of a canonical message: its bytes and ndarrays, and its
-    strings if `count_text`. What bridge and client ask before deciding whether checking or
-    encoding a message is worth a worker thread.
+def payload_bytes(value: Any) -> int:
+    """Rough byte count of the bulk data of a canonical message: its bytes and ndarrays. What
+    bridge and client ask before deciding whether checking or encoding a message is worth a
+    worker thread (strings are not bulk: base64 text is what makes a check costly).
 
     Walks message structure only (dicts and lists of dicts, bytes or arrays), never the
     elements of numeric arrays, so its cost does not grow with the points a message carries.
     """
-    if isinstance(value, bytes | bytearray | memoryview):
+    if isinstance(value, bytes | bytearray):
         return len(value)
     if isinstance(value, np.ndarray):
         return int(value.nbytes)
     if isinstance(value, dict):
-        return sum(payload_bytes(item, count_text) for item in value.values())
+        return sum(payload_bytes(item) for item in value.values())
     if isinstance(value, list) and value and isinstance(value[0], dict | bytes | np.ndarray):
-        return sum(payload_bytes(item, count_text) for item in value)
-    if count_text and isinstance(value, str):
-        return len(value)
+        return sum(payload_bytes(item) for item in value)
     return 0

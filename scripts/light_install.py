@@ -5,8 +5,9 @@ library and record/play, in a small environment that runs the bridge.
 
 Builds a fresh venv, installs this checkout into it (its tracked and new files, copied first so
 no stale `build/` of the checkout leaks into the wheel), measures the venv on disk, checks that
-none of the heavy libraries came along, starts `riverbridge bridge --port 0` from the venv and
-has the installed client library publish and receive a message through it. Prints one line per
+none of the heavy libraries came along, starts `riverbridge bridge --port 0` from the venv,
+has the installed client library publish and receive a message through it, and checks that
+`riverbridge sim` names the extra it lacks. Prints one line per
 check and exits 0 if all hold, 1 if one fails, 2 on bad arguments. tests/test_light_install.py
 runs it.
 """
@@ -123,6 +124,12 @@ def check(venv: Path, max_mb: float) -> list[str]:
         failures.append(f"the light install pulled {', '.join(found)}")
     run_bridge_smoke(venv)
     print("riverbridge bridge --port 0 served a publish/subscribe of the installed client")
+    sim = subprocess.run(
+        [str(venv / "bin" / "riverbridge"), "sim", "--help"], capture_output=True, text=True
+    )
+    print(f"riverbridge sim: exit {sim.returncode}: {sim.stderr.strip()}")
+    if sim.returncode != 2 or "riverbridge[sim]" not in sim.stderr:
+        failures.append("riverbridge sim does not name the extra it needs")
     return failures
 
 

@@ -38,3 +38,4 @@ def test_the_light_install_runs_the_bridge_without_heavy_libraries(tmp_path):
     assert result.returncode == 0, result.stdout + result.stderr
     assert "heavy libraries installed: none" in result.stdout
     assert "served a publish/subscribe" in result.stdout
+    assert "pip install 'riverbridge[sim]'" in result.stdout

@@ -84,15 +84,31 @@ def add_node_arguments(parser: argparse.ArgumentParser, config_tables: str) -> N
 LOG_LEVELS = ("DEBUG", "INFO", "WARNING", "ERROR", "CRITICAL")
 
 
-def non_negative_seconds(text: str) -> float:
-    """An argparse type: a number of seconds, 0 or more (NaN refused)."""
+def _number(text: str, unit: str, *, positive: bool) -> float:
     try:
         value = float(text)
     except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number of seconds: {text!r}") from None
-    if not value >= 0:
-        raise argparse.ArgumentTypeError(f"must be 0 or more, got {text}")
+        raise argparse.ArgumentTypeError(f"not a {unit}: {text!r}") from None
+    if not (value > 0 if positive else value >= 0):  # NaN fails both
+        raise argparse.ArgumentTypeError(
+            f"must be {'positive' if positive else '0 or more'}, got {text}"
+        )
     return value
+
+
+def non_negative_seconds(text: str) -> float:
+    """An argparse type: a number of seconds, 0 or more (NaN refused)."""
+    return _number(text, "number of seconds", positive=False)
+
+
+def positive_seconds(text: str) -> float:
+    """An argparse type: a positive number of seconds (NaN refused)."""
+    return _number(text, "number of seconds", positive=True)
+
+
+def positive_number(text: str) -> float:
+    """An argparse type: a positive number, e.g. a rate (NaN refused)."""
+    return _number(text, "number", positive=True)
 
 
 def add_client_arguments(parser: argparse.ArgumentParser) -> None:

@@ -22,9 +22,14 @@ from mcap.exceptions import McapError
 from mcap.reader import SeekingReader
 
 from clients.errors import ConnectionFailed
-from clients.node.cli import add_client_arguments, non_negative_seconds, run_until_stopped
+from clients.node.cli import (
+    add_client_arguments,
+    non_negative_seconds,
+    positive_number,
+    run_until_stopped,
+)
 from clients.recording.player import STAMP_MODES, Player, PlayStats
-from clients.recording.record_cli import topic_pattern, ws_url
+from clients.recording.record_cli import add_topics_argument, ws_url
 from clients.recording.topics import BRIDGE_OWNED, TopicFilter
 
 log = logging.getLogger("clients.recording")
@@ -40,16 +45,6 @@ def recording_file(text: str) -> Path:
     except (McapError, OSError, struct.error) as exc:  # struct.error: under 8 bytes
         raise argparse.ArgumentTypeError(f"not an MCAP file: {text} ({exc})") from None
     return path
-
-
-def positive_rate(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
-    if not value > 0:
-        raise argparse.ArgumentTypeError(f"must be positive, got {text}")
-    return value
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -68,7 +63,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument(
         "--rate",
-        type=positive_rate,
+        type=positive_number,
         default=1.0,
         metavar="X",
         help="playback speed, 2 = twice as fast (default %(default)s)",
@@ -78,13 +73,9 @@ def build_parser() -> argparse.ArgumentParser:
         action="store_true",
         help="start again after the last message, until Ctrl-C/SIGTERM",
     )
-    parser.add_argument(
-        "--topics",
-        nargs="+",
-        type=topic_pattern,
-        default=[],
-        metavar="GLOB",
-        help="play only topics matching these shell patterns (default: all but "
+    add_topics_argument(
+        parser,
+        "play only topics matching these shell patterns (default: all but "
         f"the bridge's own: {', '.join(BRIDGE_OWNED)})",
     )
     parser.add_argument(

@@ -46,6 +46,13 @@ def topic_pattern(text: str) -> str:
         raise argparse.ArgumentTypeError(str(exc)) from None
 
 
+def add_topics_argument(parser: argparse.ArgumentParser, help: str) -> None:
+    """--topics GLOB...: which topics `record` or `play` takes."""
+    parser.add_argument(
+        "--topics", nargs="+", type=topic_pattern, default=[], metavar="GLOB", help=help
+    )
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="riverbridge record",
@@ -68,13 +75,9 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="FILE",
         help="the MCAP file to write (replaced if it exists)",
     )
-    parser.add_argument(
-        "--topics",
-        nargs="+",
-        type=topic_pattern,
-        default=[],
-        metavar="GLOB",
-        help="record only topics matching these shell patterns (default: all; "
+    add_topics_argument(
+        parser,
+        "record only topics matching these shell patterns (default: all; "
         "new topics are picked up as they appear)",
     )
     parser.add_argument(

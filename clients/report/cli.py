@@ -31,6 +31,7 @@ from pathlib import Path
 from typing import Any, TextIO
 
 from clients.errors import RosbridgeError
+from clients.node.cli import positive_seconds
 from clients.node.output import PrefixedOutput
 from clients.protocol import Encoding
 from clients.recording.components import (
@@ -48,7 +49,6 @@ from clients.report.results import Run, json_ready
 from clients.report.stats import SENSOR_TOPICS
 from clients.report.text import render_comparison, render_run
 from clients.stack.launcher import SIMULATOR_TOPICS, LaunchConfig, Supervisor, stack_components
-from clients.stack.up_cli import positive_seconds
 
 log = logging.getLogger(__name__)
 

@@ -17,6 +17,7 @@ import sys
 from pathlib import Path
 
 from clients.node.child import Component
+from clients.node.cli import positive_seconds
 from clients.node.output import PrefixedLogHandler, PrefixedOutput
 from clients.recording.components import recorder_component
 from clients.recording.record_cli import output_file
@@ -38,17 +39,6 @@ def _port(text: str) -> int:
         raise argparse.ArgumentTypeError(f"not a port number: {text!r}") from None
     if not 0 <= value <= 65535:
         raise argparse.ArgumentTypeError(f"must be 0..65535 (0 picks a free port), got {value}")
-    return value
-
-
-def positive_seconds(text: str) -> float:
-    """argparse type: a positive number of seconds (shared by the stack commands)."""
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number of seconds: {text!r}") from None
-    if not value > 0:
-        raise argparse.ArgumentTypeError(f"must be positive, got {text}")
     return value
 
 

@@ -45,15 +45,20 @@ def item(n: int) -> Received:
     return Received("/t", {"n": n}, recv_ns=n, wire_bytes=10)
 
 
-async def test_subscription_drops_oldest_and_counts():
-    sub = Subscription(
+def subscription(sub_id: str, maxsize: int, unsubscribe=_noop_unsubscribe) -> Subscription:
+    """An untyped subscription of `/t` (messages as delivered, bytes as bytes)."""
+    return Subscription(
         topic="/t",
-        sub_id="subscribe:/t:1",
+        sub_id=sub_id,
         type=None,
-        maxsize=3,
+        maxsize=maxsize,
         bytes_as_numpy=False,
-        unsubscribe=_noop_unsubscribe,
+        unsubscribe=unsubscribe,
     )
+
+
+async def test_subscription_drops_oldest_and_counts():
+    sub = subscription("subscribe:/t:1", 3)
     for n in range(10):
         sub.deliver(item(n))
     assert (sub.received, sub.dropped, sub.qsize()) == (10, 7, 3)
@@ -66,9 +71,7 @@ async def test_subscription_iteration_waits_then_ends_on_unsubscribe():
     async def record(sub: Subscription) -> None:
         calls.append(sub.id)
 
-    sub = Subscription(
-        topic="/t", sub_id="s1", type=None, maxsize=4, bytes_as_numpy=False, unsubscribe=record
-    )
+    sub = subscription("s1", 4, unsubscribe=record)
 
     async def consume() -> list[int]:
         return [r.msg["n"] async for r in sub]
@@ -87,27 +90,13 @@ async def test_subscription_iteration_waits_then_ends_on_unsubscribe():
 
 
 async def test_subscription_raises_connection_loss_after_draining():
-    sub = Subscription(
-        topic="/t",
-        sub_id="s1",
-        type=None,
-        maxsize=4,
-        bytes_as_numpy=False,
-        unsubscribe=_noop_unsubscribe,
-    )
+    sub = subscription("s1", 4)
     sub.deliver(item(1))
     sub.finish(ConnectionClosed("gone"))
     assert (await sub.get()).msg["n"] == 1
     with pytest.raises(ConnectionClosed):
         await sub.get()
-    sub2 = Subscription(
-        topic="/t",
-        sub_id="s2",
-        type=None,
-        maxsize=4,
-        bytes_as_numpy=False,
-        unsubscribe=_noop_unsubscribe,
-    )
+    sub2 = subscription("s2", 4)
     sub2.finish(ClientClosed("closed"))
     assert [r async for r in sub2] == []
 

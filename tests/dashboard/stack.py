@@ -19,7 +19,8 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
-REPO_ROOT = Path(__file__).resolve().parents[2]
+from tests.child_process import REPO_ROOT, repo_env
+
 WEB_DIR = REPO_ROOT / "web"
 SCRIPTS_DIR = Path(__file__).resolve().parent
 CHROMIUM = Path(os.environ.get("RIVERBRIDGE_CHROMIUM", "/usr/bin/chromium"))
@@ -68,13 +69,11 @@ class Stack:
 @contextlib.contextmanager
 def running_stack(log_path: Path) -> Iterator[Stack]:
     """Start bridge, simulator and navigation; stop them (SIGINT, then the group) on exit."""
-    env = dict(os.environ)
-    env["PYTHONPATH"] = os.pathsep.join(filter(None, [str(REPO_ROOT), env.get("PYTHONPATH")]))
     with log_path.open("w") as log:
         process = subprocess.Popen(
             [sys.executable, "-m", "clients.stack.up_cli", "--port", "0"],
             cwd=REPO_ROOT,
-            env=env,
+            env=repo_env(),
             stdin=subprocess.DEVNULL,
             stdout=log,
             stderr=subprocess.STDOUT,

@@ -18,6 +18,7 @@ from clients.errors import ServiceError
 from schemas import codec_cbor
 from schemas.codec_cdr import to_cdr
 from schemas.message import normalize
+from tests.receiving import collect, drain
 
 pytestmark = pytest.mark.slow
 
@@ -37,15 +38,6 @@ async def until(predicate, timeout_s: float = DISCOVERY_TIMEOUT_S, every_s: floa
         while not (result := await predicate()):
             await asyncio.sleep(every_s)
     return result
-
-
-async def drain(sub, seconds: float) -> list[dict]:
-    received = []
-    with contextlib.suppress(TimeoutError):
-        async with asyncio.timeout(seconds):
-            async for item in sub:
-                received.append(item.msg)
-    return received
 
 
 async def test_topics_cross_once_each_way_and_never_echo(dds_domain, registry):
@@ -71,26 +63,13 @@ async def test_topics_cross_once_each_way_and_never_echo(dds_domain, registry):
             await on_a.publish("/chatter", {"data": f"a{n}"})
             await on_b.publish("/chatter", {"data": f"b{n}"})
             await asyncio.sleep(0.01)
-        got_a = [m["data"] for m in await collect(heard_a, 40)]
-        got_b = [m["data"] for m in await collect(heard_b, 40)]
+        got_a = [m["data"] for m in await collect(heard_a, 40, grace_s=0.3)]
+        got_b = [m["data"] for m in await collect(heard_b, 40, grace_s=0.3)]
     expected = Counter({f"{side}{n}": 1 for side in "ab" for n in range(20)})
     assert Counter(got_a) == expected  # its own once (locally), the other's once (over DDS)
     assert Counter(got_b) == expected
     assert [d for d in got_a if d[0] == "b"] == [f"b{n}" for n in range(20)]  # in order
     assert [d for d in got_b if d[0] == "a"] == [f"a{n}" for n in range(20)]
-
-
-async def collect(sub, count: int, timeout_s: float = 10.0, grace_s: float = 0.3) -> list[dict]:
-    """`count` messages (or what came in `timeout_s`), plus whatever follows in `grace_s`
-    (duplicates would)."""
-    received = []
-    with contextlib.suppress(TimeoutError):
-        async with asyncio.timeout(timeout_s):
-            async for item in sub:
-                received.append(item.msg)
-                if len(received) >= count:
-                    break
-    return received + await drain(sub, grace_s)
 
 
 async def drain_until_probe(sub) -> bool:

@@ -18,7 +18,7 @@ from clients.report.table import Column, fmt_ms, render_table, text_column
 from clients.report.text import render_comparison, render_run
 
 from .test_quality import box, header, obj
-from .test_report_stats import MS, path_spans
+from .test_report_stats import MS, path_spans, stats_msg
 
 # The document's keys, as scripts and docs/report.md read them.
 RUN_KEYS = [
@@ -133,19 +133,7 @@ def observations() -> Observations:
     spans = [s for k in range(10) for s in path_spans(10**18 + k * 500 * MS)]
     spans += [s for k in range(10) for s in path_spans(10**18 + k * 20 * MS, topic="/imu/data")]
     stats = [
-        {
-            "header": header(sec),
-            "process": name,
-            "cpu_percent": 10.0 * sec,
-            "rss_bytes": 100 * sec,
-            "pid": pid,
-            "host": "h",
-            "messages_out": 1,
-            "messages_in": 2,
-            "bytes_out": 3,
-            "bytes_in": 4,
-            "dropped": 0,
-        }
+        stats_msg(sec, name, 10.0 * sec, 100 * sec, pid)
         for sec in (1, 2)
         for name, pid in (("bridge", 11), ("simulator", 12))
     ]

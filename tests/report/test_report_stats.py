@@ -35,15 +35,15 @@ def path_spans(
     t = stamp_ns
     extra = int(transport_extra_ms * MS)
 
-    def span(stage, process, start_ms, end_ms, peer="", payload=0, wire=0):
+    def span(stage, process, start_ms, end_ms, peer="", payload=0, wire=0, late_ns=0):
         return SpanRecord(
             topic,
             stamp_ns,
             stage,
             process,
             peer,
-            t + int(start_ms * MS),
-            t + int(end_ms * MS),
+            t + int(start_ms * MS) + late_ns,
+            t + int(end_ms * MS) + late_ns,
             payload,
             wire,
             "host",
@@ -55,55 +55,28 @@ def path_spans(
         span("send", "simulator", 11, 12, wire=1010),
         span("bridge_in", "bridge", 13, 14, payload=1000, wire=1010),
         span("fanout", "bridge", 14, 15, peer=subscriber, wire=1020),
-        SpanRecord(
-            topic,
-            stamp_ns,
-            "decode",
-            subscriber,
-            "",
-            t + 16 * MS + extra,
-            t + 17 * MS + extra,
-            0,
-            1020,
-            "host",
-        ),
-        SpanRecord(
-            topic,
-            stamp_ns,
-            "wait",
-            subscriber,
-            "",
-            t + 17 * MS + extra,
-            t + 18 * MS + extra,
-            0,
-            0,
-            "host",
-        ),
-        SpanRecord(
-            topic,
-            stamp_ns,
-            "process",
-            subscriber,
-            "",
-            t + 18 * MS + extra,
-            t + 30 * MS + extra,
-            0,
-            0,
-            "host",
-        ),
-        SpanRecord(
-            topic,
-            stamp_ns,
-            "process.dbscan",
-            subscriber,
-            "",
-            t + 18 * MS + extra,
-            t + 25 * MS + extra,
-            0,
-            0,
-            "host",
-        ),
+        span("decode", subscriber, 16, 17, wire=1020, late_ns=extra),
+        span("wait", subscriber, 17, 18, late_ns=extra),
+        span("process", subscriber, 18, 30, late_ns=extra),
+        span("process.dbscan", subscriber, 18, 25, late_ns=extra),
     ]
+
+
+def stats_msg(sec: int, process: str, cpu_percent: float, rss_bytes: int, pid: int = 1) -> dict:
+    """A ProcessStats of `process` at `sec` with fixed counters."""
+    return {
+        "header": {"stamp": {"sec": sec, "nanosec": 0}, "frame_id": ""},
+        "process": process,
+        "cpu_percent": cpu_percent,
+        "rss_bytes": rss_bytes,
+        "pid": pid,
+        "host": "h",
+        "messages_out": 1,
+        "messages_in": 2,
+        "bytes_out": 3,
+        "bytes_in": 4,
+        "dropped": 0,
+    }
 
 
 def test_a_journey_has_every_stage_and_both_hops():
@@ -212,22 +185,8 @@ def test_loopback_counters_are_read_from_proc_net_dev_text():
 
 
 def test_process_and_network_summaries():
-    stats = [
-        {
-            "header": {"stamp": {"sec": sec, "nanosec": 0}, "frame_id": ""},
-            "process": "bridge",
-            "cpu_percent": c,
-            "rss_bytes": r,
-            "pid": 1,
-            "host": "h",
-            "messages_out": 1,
-            "messages_in": 2,
-            "bytes_out": 3,
-            "bytes_in": 4,
-            "dropped": 0,
-        }
-        for sec, c, r in ((1, 10.0, 100), (2, 30.0, 300), (3, 50.0, 200))
-    ]
+    samples = ((1, 10.0, 100), (2, 30.0, 300), (3, 50.0, 200))
+    stats = [stats_msg(sec, "bridge", cpu, rss) for sec, cpu, rss in samples]
     # A process with two connections announces its third sample on both.
     bridge = process_summary([*stats, stats[2]])["bridge"]
     assert bridge.samples == 3

@@ -282,7 +282,7 @@ def test_declared_defaults_of_standard_messages(registry):
     assert norm(registry, "geometry_msgs/Quaternion", {"w": 0})["w"] == 0.0
 
 
-def test_payload_bytes_counts_arrays_not_structure_and_text_when_asked():
+def test_payload_bytes_counts_arrays_and_bytes_not_structure_or_text():
     msg = {
         "data": b"x" * 1000,
         "points": np.zeros((10, 4), np.float32),
@@ -291,4 +291,3 @@ def test_payload_bytes_counts_arrays_not_structure_and_text_when_asked():
         "markers": [{"blob": b"y" * 5}],
     }
     assert payload_bytes(msg) == 1000 + 160 + 5
-    assert payload_bytes(msg, count_text=True) == 1000 + 160 + 3 + 5

@@ -22,6 +22,20 @@ def bridge_argv(port: int = 0) -> list[str]:
     return [sys.executable, "-m", "bridge", "--host", "127.0.0.1", "--port", str(port)]
 
 
+def light_config(folder: Path, resolution_deg: float, camera_width_px: int) -> Path:
+    """A simulator TOML in `folder` with a coarse scene (no trees or houses), LIDAR at
+    `resolution_deg` and a small 4:3 camera: for tests about connections and commands, not
+    about the sensors' cost."""
+    path = folder / "light_sim.toml"
+    path.write_text(
+        "[scene]\nterrain_cells = 60\ntrees = 0\nhouses = 0\n"
+        f"[lidar]\nhorizontal_resolution_deg = {resolution_deg}\n"
+        f"vertical_resolution_deg = {resolution_deg}\n"
+        f"[camera]\nwidth_px = {camera_width_px}\nheight_px = {camera_width_px * 3 // 4}\n"
+    )
+    return path
+
+
 def simulator_argv(url: str, config: Path | None = None) -> list[str]:
     argv = [sys.executable, "-m", "simulator", "--bridge", url, "--connect-timeout", "60"]
     return argv + (["--config", str(config)] if config is not None else [])

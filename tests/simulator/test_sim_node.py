@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import asyncio
-import contextlib
 
 import numpy as np
 import pytest
@@ -17,6 +16,7 @@ from simulator.cli import main
 from simulator.config import CameraConfig, LidarConfig, SceneConfig, SimConfig
 from simulator.node import serve
 from simulator.scene import build_scene
+from tests.receiving import collect
 
 pytestmark = pytest.mark.slow
 
@@ -38,17 +38,6 @@ LIGHT = SimConfig(
 async def bridge():
     async with run_bridge(BridgeConfig(host="127.0.0.1", port=0)) as running:
         yield running
-
-
-async def collect(sub, count: int, timeout_s: float) -> list:
-    received = []
-    with contextlib.suppress(TimeoutError):
-        async with asyncio.timeout(timeout_s):
-            async for item in sub:
-                received.append(item.msg)
-                if len(received) >= count:
-                    break
-    return received
 
 
 @pytest.mark.parametrize("encoding", ["cbor", "json"])

@@ -13,23 +13,15 @@ from clients import RosbridgeClient
 from schemas.catalogue import TOPICS as CATALOGUE
 from schemas.catalogue import published_by
 from tests.child_process import running
-from tests.simulator.sim_processes import header_stamp_s, running_bridge, simulator_argv
+from tests.simulator.sim_processes import (
+    header_stamp_s,
+    light_config,
+    running_bridge,
+    simulator_argv,
+)
 
 pytestmark = pytest.mark.slow
 
-# Coarse scene and sensors: this test is about the connection, not the sensors' cost.
-LIGHT_TOML = """
-[scene]
-terrain_cells = 60
-trees = 0
-houses = 0
-[lidar]
-horizontal_resolution_deg = 2.0
-vertical_resolution_deg = 2.0
-[camera]
-width_px = 160
-height_px = 120
-"""
 # Every sensor topic the simulator streams (schemas.catalogue): key -> (name, type)
 TOPICS = {t.key: t.pair for t in published_by("simulator", "sensor", "realtime")}
 DOWN_S = 2.0  # the simulator keeps running (and retrying) this long without a bridge
@@ -58,8 +50,7 @@ def assert_all_arrived(first: dict[str, dict | None], sim_output: str) -> None:
 
 
 async def test_simulator_resumes_every_topic_after_the_bridge_restarts(tmp_path, registry):
-    config = tmp_path / "sim.toml"
-    config.write_text(LIGHT_TOML)
+    config = light_config(tmp_path, resolution_deg=2.0, camera_width_px=160)
     connected = re.compile(r"simulator connected to")
     with running_bridge() as (first_bridge, url):
         port = url.rsplit(":", 1)[1]

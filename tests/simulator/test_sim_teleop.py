@@ -23,7 +23,7 @@ from simulator.config import VesselConfig
 from simulator.teleop import Action, KeyDecoder, TeleopCommand, TeleopScale
 from simulator.teleop_cli import main
 from tests.child_process import REPO_ROOT, running
-from tests.simulator.sim_processes import running_bridge, simulator_argv
+from tests.simulator.sim_processes import light_config, running_bridge, simulator_argv
 
 SCALE = TeleopScale(max_surge_force_n=4000.0, max_yaw_moment_nm=6000.0, steps=10)
 
@@ -190,18 +190,6 @@ async def test_cli_publishes_on_keys_steadily_and_zero_on_quit(monkeypatch, regi
 
 
 # ------------------------------------------------------------------ against the simulator
-LIGHT_TOML = """
-[scene]
-terrain_cells = 60
-trees = 0
-houses = 0
-[lidar]
-horizontal_resolution_deg = 4.0
-vertical_resolution_deg = 4.0
-[camera]
-width_px = 80
-height_px = 60
-"""
 
 
 def yaw_of(odom: dict) -> float:
@@ -219,8 +207,7 @@ async def latest_odom(sub, timeout_s: float = 10.0) -> dict:
 
 @pytest.mark.slow
 async def test_teleop_in_a_terminal_steers_the_simulated_vessel(tmp_path, registry):
-    config = tmp_path / "sim.toml"
-    config.write_text(LIGHT_TOML)
+    config = light_config(tmp_path, resolution_deg=4.0, camera_width_px=80)
     controller, terminal = os.openpty()
     settings_before = termios.tcgetattr(terminal)
     try:

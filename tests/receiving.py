@@ -1,0 +1,34 @@
+"""Taking messages off a client library `Subscription` in tests, bounded in time."""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+from typing import Any
+
+from clients.subscription import Subscription
+
+
+async def collect(
+    sub: Subscription, count: int, timeout_s: float = 10.0, grace_s: float = 0.0
+) -> list[dict[str, Any]]:
+    """The first `count` messages (fewer if `timeout_s` runs out), plus whatever arrives in
+    the `grace_s` after them (where a duplicate would show)."""
+    received: list[dict[str, Any]] = []
+    with contextlib.suppress(TimeoutError):
+        async with asyncio.timeout(timeout_s):
+            async for item in sub:
+                received.append(item.msg)
+                if len(received) >= count:
+                    break
+    return received + (await drain(sub, grace_s) if grace_s > 0 else [])
+
+
+async def drain(sub: Subscription, seconds: float) -> list[dict[str, Any]]:
+    """Every message that arrives in the next `seconds`."""
+    received: list[dict[str, Any]] = []
+    with contextlib.suppress(TimeoutError):
+        async with asyncio.timeout(seconds):
+            async for item in sub:
+                received.append(item.msg)
+    return received
