@@ -1,8 +1,8 @@
 """Relay through the bridge: one publisher process and one subscriber process, one websocket
 each (as roslibjs, ROS#, Unity and Foxglove clients connect), JSON and CBOR.
 
-Workloads (issue 11), each printed beside the reference rosbridge_suite 0.11.17 figures measured
-on this machine in the issue (stored figures, printed with their source and "NOT re-measured"):
+Workloads (issues 11 and 21), each printed beside the reference figures (with their source and
+date; stored, not re-measured):
 
 1. burst: 15,000 ~100-byte ``std_msgs/String`` sent as fast as the publisher can while the
    subscriber reads as fast as it can: delivered, loss, delivered/s, ages;
@@ -12,19 +12,24 @@ on this machine in the issue (stored figures, printed with their source and "NOT
    scan age p50/p99/max and IMU age p99/max;
 4. scan2 (only when asked for): the same with the scan and the IMU each on a connection of its
    own, in the publisher and in the subscriber: does a second connection still help?
+5. fanout (CBOR only): the scan and the IMU of 3. to 16 subscriber connections (four processes
+   of four): every scan delivered, scan p50 and IMU p99;
+6. service (JSON): a caller calls a service another client provides, one call at a time:
+   caller -> relay -> provider -> relay -> caller round trip p50/p95/p99.
 
 Ages run from just before the publisher encodes (the stamp inside the message) to just after
 the subscriber decoded, on one wall clock. The clients are plain ``websockets`` connections
 that behave like a careful third-party client: big JSON frames are encoded and decoded on a worker
 thread, in order, as riverbridge's own client library does, so the clients add as little as
-they can.
+they can. Before the workloads each relay's idle RSS and CPU are printed; every workload also
+gives the relay's CPU seconds per 10,000 relayed messages (deliveries; a call counts two).
 
-Usage: python -m benchmarks.relay [--only burst,sustained,scan] [--encodings json,cbor]
-       [--repeat N] [--compare /work/main] [--floor] [--url ws://host:port]
-       [-- bridge options...]
-With --repeat, --compare (another checkout's bridge) or --floor (a bare websockets relay that
-forwards frames unvalidated), the relays run interleaved and the medians are printed side by
-side with their ratios to this checkout's bridge.
+Usage: python -m benchmarks.relay [--only burst,sustained,scan,fanout,service]
+       [--encodings json,cbor] [--repeat N [--interleave]] [--compare /work/main] [--uvloop]
+       [--floor] [--url ws://host:port] [-- bridge options...]
+With --compare (another checkout's bridge), --uvloop (this bridge on uvloop instead of the
+standard loop) or --floor (a bare websockets relay that forwards frames unvalidated), the
+relays run in turn and the medians are printed side by side with their ratios to the floor.
 
 Measured here, quiet (`--compare <checkout> --floor --repeat 3`, load 0.02-2.3 from the
 benchmark itself; two sittings, medians of 3 interleaved runs each; "before" = the bridge
@@ -248,9 +253,9 @@ def start_targets(args: argparse.Namespace) -> list[Target]:
     else:
         process, url = start_bridge(args.bridge_args, None)
         targets.append(Target("this", url, process.pid, process.terminate))
-    if args.pure:  # this checkout's bridge on the standard event loop
-        process, url = start_bridge(args.bridge_args, None, "asyncio")
-        targets.append(Target("asyncio", url, process.pid, process.terminate))
+    if args.uvloop:  # this checkout's bridge on uvloop instead of the standard loop
+        process, url = start_bridge(args.bridge_args, None, "uvloop")
+        targets.append(Target("uvloop", url, process.pid, process.terminate))
     if args.compare:
         process, url = start_bridge(args.bridge_args, args.compare)
         targets.append(
@@ -369,9 +374,9 @@ def main(argv: list[str] | None = None) -> int:
         "interleaved, and print ratios",
     )
     parser.add_argument(
-        "--pure",
+        "--uvloop",
         action="store_true",
-        help=f"also run this bridge on the standard asyncio loop ({EVENT_LOOP_ENV}=asyncio)",
+        help=f"also run this bridge on uvloop ({EVENT_LOOP_ENV}=uvloop)",
     )
     parser.add_argument(
         "--floor",

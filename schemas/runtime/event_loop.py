@@ -1,12 +1,13 @@
-"""Which asyncio event loop a riverbridge process runs on: uvloop where it is installed, else
-the standard one; `RIVERBRIDGE_EVENT_LOOP=asyncio` keeps the standard loop anyway.
+"""Which asyncio event loop a riverbridge process runs on: the standard one, or uvloop when
+`RIVERBRIDGE_EVENT_LOOP=uvloop` asks for it (install the `uvloop` extra).
 
 uvloop (libuv) runs the same asyncio code: websockets, TLS, timers and executors all work on
-it unchanged. It cuts the loop's own cost per callback and per socket write, which is most of
-what a small relayed message costs beyond decoding and routing, and its transports keep a
-reference to a written buffer instead of copying what the kernel did not take at once (one
-scan fanned out to many sockets is not copied per socket). Measured with
-`benchmarks/relay.py --pure` (the bridge on both loops in one run).
+it unchanged (every real client in tests/compat passed against a bridge on it, 2026-11-26).
+It is not the default because it did not win where this project is judged
+(`benchmarks/relay.py --uvloop`, the bridge on both loops in one run, 2026-11-26): it halved a
+service round trip's tail (p95 3.3 vs 8.6 ms, load 7-32) and moved small messages at the same
+rate, but a full CBOR scan fanned out to 16 subscribers arrived later than on asyncio's loop
+(scan p50 1.79x the bare relay's against 1.15x, load 5-11), the figure DESIGN §4 cares about.
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ from typing import Any, TypeVar
 
 T = TypeVar("T")
 
-#: Names the event loop: "uvloop" (the default where installed) or "asyncio" (the standard one).
+#: Names the event loop: "asyncio" (the standard one, the default) or "uvloop".
 EVENT_LOOP_ENV = "RIVERBRIDGE_EVENT_LOOP"
 EVENT_LOOPS = ("uvloop", "asyncio")
 
@@ -30,22 +31,20 @@ class EventLoopChoiceError(ValueError):
 
 
 def chosen_loop(environ: Mapping[str, str] | None = None) -> str:
-    """The loop this process should run: `RIVERBRIDGE_EVENT_LOOP` if set, else uvloop when it
-    is importable, else asyncio. Raises EventLoopChoiceError for an unknown name, or for
-    "uvloop" when it is not installed."""
+    """The loop this process should run: `RIVERBRIDGE_EVENT_LOOP` if set, else asyncio.
+    Raises EventLoopChoiceError for an unknown name, or for "uvloop" when it is not
+    installed."""
     env = os.environ if environ is None else environ
-    wanted = env.get(EVENT_LOOP_ENV, "").strip().lower()
-    if wanted and wanted not in EVENT_LOOPS:
+    wanted = env.get(EVENT_LOOP_ENV, "").strip().lower() or "asyncio"
+    if wanted not in EVENT_LOOPS:
         raise EventLoopChoiceError(
             f"{EVENT_LOOP_ENV}={wanted!r}: expected one of {', '.join(EVENT_LOOPS)}"
         )
-    if wanted == "asyncio":
-        return "asyncio"
-    if _uvloop_factory() is not None:
-        return "uvloop"
-    if wanted == "uvloop":
-        raise EventLoopChoiceError(f"{EVENT_LOOP_ENV}=uvloop, but uvloop is not installed")
-    return "asyncio"
+    if wanted == "uvloop" and _uvloop_factory() is None:
+        raise EventLoopChoiceError(
+            f"{EVENT_LOOP_ENV}=uvloop, but uvloop is not installed (pip install uvloop)"
+        )
+    return wanted
 
 
 def loop_factory(name: str) -> LoopFactory | None:

@@ -1,5 +1,5 @@
-"""The event loop choice (`schemas.runtime.event_loop`): uvloop by default where installed,
-the standard loop on request, and a bad choice refused by name, also by the bridge's CLI."""
+"""The event loop choice (`schemas.runtime.event_loop`): the standard loop by default, uvloop
+on request, and a bad choice refused by name, also by the bridge's CLI."""
 
 from __future__ import annotations
 
@@ -12,10 +12,10 @@ from schemas.runtime import event_loop
 from schemas.runtime.event_loop import EVENT_LOOP_ENV, EventLoopChoiceError, chosen_loop
 
 
-def test_uvloop_is_the_default_and_asyncio_can_be_chosen() -> None:
-    assert chosen_loop({}) == "uvloop"  # a base dependency: installed wherever riverbridge is
-    assert chosen_loop({EVENT_LOOP_ENV: "asyncio"}) == "asyncio"
-    assert chosen_loop({EVENT_LOOP_ENV: " UVLOOP "}) == "uvloop"
+def test_asyncio_is_the_default_and_uvloop_can_be_chosen() -> None:
+    assert chosen_loop({}) == "asyncio"
+    assert chosen_loop({EVENT_LOOP_ENV: ""}) == "asyncio"
+    assert chosen_loop({EVENT_LOOP_ENV: " UVLOOP "}) == "uvloop"  # in the test extra
 
 
 def test_an_unknown_loop_is_refused_by_name() -> None:
