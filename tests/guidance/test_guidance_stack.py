@@ -4,9 +4,9 @@ four real processes), judged from the simulator's ground truth over a real bridg
 One stack serves the three tests (starting it costs ~30 s on 2 cores), in file order: the
 vessel travels 200 m along the river past a vessel anchored on its course; navigation frozen
 (SIGSTOP) makes guidance slow down and stop; guidance killed makes the simulator's command
-timeout stop the vessel, and `up` brings guidance back. Light sensors (1.5-degree LIDAR, small
-camera, coarse terrain) keep the simulator in real time on a shared machine; the loop is the
-real one.
+timeout cut the thrust (the vessel slows), and `up` brings guidance back. Light sensors
+(1.5-degree LIDAR, small camera, coarse terrain) keep the simulator in real time on a shared
+machine; the loop is the real one.
 """
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ from __future__ import annotations
 import asyncio
 import os
 import signal
-from collections.abc import AsyncIterator, Iterator
+from collections.abc import AsyncGenerator, Iterator
 from typing import Any
 
 import numpy as np
@@ -50,6 +50,10 @@ GUIDANCE = GuidanceConfig()
 VESSEL = VesselConfig()
 DRIVE_TIMEOUT_S = 150.0  # 200 m at 3.5 m/s is ~60 s; a loaded machine slows the loop (stale)
 FAULT_TIMEOUT_S = 40.0
+# zero thrust at ~3.5 m/s decelerates the hull by ~1 m/s^2 (VesselConfig damping); the timeout
+# (1 s) plus a restart leaves it unpowered for over a second
+SLOWED_BY_MPS = 0.3
+UNDER_WAY_MPS = 3.0  # guidance cruises at 3.5 m/s (config/guidance.toml)
 
 
 @pytest.fixture(scope="module")
@@ -70,7 +74,7 @@ async def latest(subscription: Subscription, timeout_s: float = 10.0) -> Any:
         return (await anext(aiter(subscription))).msg
 
 
-async def poses(client: RosbridgeClient) -> AsyncIterator[VesselPose]:
+async def poses(client: RosbridgeClient) -> AsyncGenerator[VesselPose, None]:
     odom = await client.subscribe(*TOPICS["odom"].pair, maxsize=1, throttle_rate=100)
     async for received in odom:
         yield pose_of(received.msg)
@@ -140,21 +144,31 @@ async def test_stale_navigation_slows_and_stops_the_vessel(stack):
 
 
 @pytest.mark.timeout(5 * FAULT_TIMEOUT_S)
-async def test_a_killed_guidance_stops_the_vessel_and_up_restarts_it(stack):
+async def test_a_killed_guidance_loses_the_thrusters_to_the_timeout_and_up_restarts_it(stack):
+    """`up` restarts guidance within a second or two on a quiet machine, so the vessel does not
+    come to rest in between; what is checked is that the command timeout cut the thrust (it is
+    counted, and the vessel slows on its damping alone) and that the autopilot steers again."""
     up, url = stack
     guidance = up.child_pids()["guidance"]
     async with RosbridgeClient(url, name="judge") as judge:
         status = await judge.subscribe(*TOPICS["sim_status"].pair, maxsize=100)
         before = int(status_of(await latest(status))["command_timeouts"])
+        track = poses(judge)
+        async with asyncio.timeout(FAULT_TIMEOUT_S):  # under way again after the stale test
+            async for pose in track:
+                if pose.surge_mps >= UNDER_WAY_MPS:
+                    break
         os.kill(guidance, signal.SIGKILL)
+        peak_mps = pose.surge_mps  # the last command is held until the timeout, then cut
         async with asyncio.timeout(FAULT_TIMEOUT_S):
-            while True:
-                now = status_of(await latest(status))
-                if now["source"] == "none" and int(now["command_timeouts"]) > before:
+            async for pose in track:
+                peak_mps = max(peak_mps, pose.surge_mps)
+                if pose.surge_mps < peak_mps - SLOWED_BY_MPS:
                     break
-            async for pose in poses(judge):
-                if abs(pose.surge_mps) < 1.0:  # coasting to rest on its damping
-                    break
+        await track.aclose()
+        async with asyncio.timeout(FAULT_TIMEOUT_S):
+            while int(status_of(await latest(status))["command_timeouts"]) <= before:
+                pass
         up.wait_for_line("guidance was killed by SIGKILL", FAULT_TIMEOUT_S)
         async with asyncio.timeout(FAULT_TIMEOUT_S * 2):
             while status_of(await latest(status))["source"] != "autopilot":
