@@ -45,6 +45,15 @@ before issue 11, measured in an earlier sitting at load 1.2-3.4):
     scan+IMU CBOR     scan p50 12.1-14.4 ms,     16.0 ms, 6.0 ms      11.9-12.5 ms, 2.2 ms
                       IMU p99 3.2-4.0 ms
 
+Measured 2026-11-26 (issue 21: `--floor --compare <before> --repeat 2 --interleave --seconds 5`,
+load 2.1-4.0, the machine shared with five other sessions; ratios to the bare relay of the same
+run): small messages 0.41-0.52x the relay (which moved 18,600-25,600 msg/s), lossless, the
+bridge's CPU 0.7-0.8 s per 10,000 relayed against the relay's 0.3 s; one-connection scan + IMU
+at or under the relay (CBOR scan p50 20.7 ms, 0.38x; IMU p99 11 ms); 16-subscriber fan-out
+every scan delivered, scan p50 1.55-2.0x and IMU p99 1.07-1.8x the relay's (the relay's own
+figures moved 2x between runs); service round trip p50 0.9 ms (relay 0.6), p95 2.6 ms (2.4).
+Idle: 60 MiB RSS and 0 % CPU (80 MiB before OpenCV became a lazy import; the relay 41 MiB).
+
 The bare relay forwards the publisher's frame as it came and validates nothing: on one
 connection its scan and IMU figures are what the clients, the copies and the kernel cost here.
 """

@@ -3,11 +3,9 @@
 A message for a client whose socket has room and nothing waiting is framed and handed to the
 transport at once, in the same loop turn that produced it: no queue, no task switch. Frames
 written in one turn leave in one `transport.write` when the turn ends (one system call for a
-burst instead of one per message); a large payload is written on its own after its header
-(`bridge.framing`), the very buffer every subscriber of the message shares. Only when the
-socket is backed up (the transport holds more than `room_bytes`, 1 MiB by default) do messages
-wait in the client's `SendQueue`, bounded in bytes; past the bound each topic loses its oldest
-waiting message, counted (`bridge.sendqueue`).
+burst instead of one per message). Only when the socket is backed up (the transport holds more
+than `room_bytes`, 1 MiB by default) do messages wait in the client's `SendQueue`, bounded in bytes;
+past the bound each topic loses its oldest waiting message, counted (`bridge.sendqueue`).
 
 Large messages whose encode is not just C code holding the GIL are encoded on a worker thread
 (JSON with base64, PNG, CDR); their topic waits for the encode (order per topic), other topics
@@ -37,7 +35,6 @@ from websockets.asyncio.server import ServerConnection
 from websockets.protocol import State
 
 from bridge.effects import Send
-from bridge.framing import frame_header
 from bridge.outgoing import CBOR, CBOR_RAW, Delivery, WireFrame, render
 from bridge.problems import NS_PER_S, ProblemLog
 from bridge.reply_budget import ReplyBudget
@@ -106,10 +103,6 @@ class ClientLink:
         self._transport = ws.transport
         self._transport.set_write_buffer_limits(high=self.room_bytes)  # drain() wakes at 1/4
         self._protocol = ws.protocol
-        # Frames are built here (`bridge.framing`) unless an extension (permessage-deflate)
-        # must transform them; `_framed` holds this turn's headers and payloads.
-        self._own_framing = not ws.protocol.extensions
-        self._framed: list[bytes] = []
         self._busy: set[str | None] = set()  # streams with a message being encoded
         self._fragment_seq = 0  # numbers fragment ids of messages that have no id of their own
         self._corked = 0  # bytes framed this turn, not yet handed to the transport
@@ -263,10 +256,7 @@ class ClientLink:
             return
         nbytes = 0
         for frame in frames:
-            if self._own_framing:  # the header, then the shared payload itself: no copy
-                self._framed.append(frame_header(frame.text, len(frame.data)))
-                self._framed.append(frame.data)
-            elif frame.text:
+            if frame.text:
                 protocol.send_text(frame.data)
             else:
                 protocol.send_binary(frame.data)
@@ -283,10 +273,7 @@ class ClientLink:
         """Hand this turn's frames to the transport, small ones joined into one write."""
         self._flush_pending = False
         self._corked = 0
-        chunks = self._protocol.data_to_send()  # websockets' own (empty with our framing)
-        if self._framed:
-            chunks += self._framed
-            self._framed = []
+        chunks = self._protocol.data_to_send()
         if self._protocol.state is State.OPEN and not self._transport.is_closing():
             self._write_chunks(chunks)  # (closing: the frames can no longer be delivered)
         now_ns = time.time_ns()
