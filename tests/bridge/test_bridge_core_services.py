@@ -13,6 +13,20 @@ def provide(
     return provider
 
 
+def pending_call(h: CoreHarness) -> tuple[int, int, str]:
+    """A provider, a caller and the id of the caller's call (id 1) as the provider got it."""
+    provider = provide(h)
+    caller = h.connect()
+    h.send(caller, {"op": "call_service", "service": "/test_service", "id": 1})
+    return provider, caller, h.outbox(provider)[0]["id"]
+
+
+def respond(
+    h: CoreHarness, provider: int, request_id: str, service: str = "/test_service", **fields
+) -> None:
+    h.send(provider, {"op": "service_response", "service": service, "id": request_id, **fields})
+
+
 def test_round_trip_between_two_clients(harness):
     provider = provide(harness)
     caller = harness.connect()
@@ -29,15 +43,12 @@ def test_round_trip_between_two_clients(harness):
             "args": {"data": True},
         }
     ]
-    harness.send(
+    respond(
+        harness,
         provider,
-        {
-            "op": "service_response",
-            "service": "/test_service",
-            "id": request[0]["id"],
-            "result": True,
-            "values": {"success": True, "message": "Hello, world!"},
-        },
+        request[0]["id"],
+        result=True,
+        values={"success": True, "message": "Hello, world!"},
     )
     assert harness.outbox(caller) == [
         {
@@ -79,40 +90,16 @@ def test_unknown_service_fails_promptly(harness):
 
 
 def test_values_object_means_success_even_with_result_false(harness):
-    provider = provide(harness)
-    caller = harness.connect()
-    harness.send(caller, {"op": "call_service", "service": "/test_service", "id": 1})
-    request_id = harness.outbox(provider)[0]["id"]
-    harness.send(
-        provider,
-        {
-            "op": "service_response",
-            "service": "/test_service",
-            "id": request_id,
-            "result": False,
-            "values": {"success": True},
-        },
-    )
+    provider, caller, request_id = pending_call(harness)
+    respond(harness, provider, request_id, result=False, values={"success": True})
     response = harness.outbox(caller)[0]
     assert response["result"] is True
     assert response["values"] == {"success": True, "message": ""}
 
 
 def test_failure_text_from_provider_is_passed_on(harness):
-    provider = provide(harness)
-    caller = harness.connect()
-    harness.send(caller, {"op": "call_service", "service": "/test_service", "id": 1})
-    request_id = harness.outbox(provider)[0]["id"]
-    harness.send(
-        provider,
-        {
-            "op": "service_response",
-            "service": "/test_service",
-            "id": request_id,
-            "result": False,
-            "values": "broken",
-        },
-    )
+    provider, caller, request_id = pending_call(harness)
+    respond(harness, provider, request_id, result=False, values="broken")
     assert harness.outbox(caller)[0] == {
         "op": "service_response",
         "service": "/test_service",
@@ -136,16 +123,7 @@ def test_calls_time_out_with_the_default_or_their_own_timeout(harness):
     assert [(r["id"], r["result"]) for r in late] == [("default", False)]
     assert "timed out" in late[0]["values"]
     first_request = harness.outbox(provider)[0]["id"]
-    harness.send(
-        provider,
-        {
-            "op": "service_response",
-            "service": "/test_service",
-            "id": first_request,
-            "result": True,
-            "values": {},
-        },
-    )
+    respond(harness, provider, first_request, result=True, values={})
     assert harness.outbox(caller) == []
 
 
@@ -188,21 +166,9 @@ def test_re_advertising_replaces_the_provider_and_restarts_ids(harness):
 
 
 def test_caller_disconnect_leaves_provider_response_harmless(harness):
-    provider = provide(harness)
-    caller = harness.connect()
-    harness.send(caller, {"op": "call_service", "service": "/test_service", "id": 1})
-    request_id = harness.outbox(provider)[0]["id"]
+    provider, caller, request_id = pending_call(harness)
     harness.disconnect(caller)
-    harness.send(
-        provider,
-        {
-            "op": "service_response",
-            "service": "/test_service",
-            "id": request_id,
-            "result": True,
-            "values": {},
-        },
-    )
+    respond(harness, provider, request_id, result=True, values={})
     assert harness.state.pending_calls == {}
     assert harness.outbox(provider) == []
 
@@ -216,15 +182,8 @@ def test_untyped_service_is_relayed_as_json(harness):
     )
     request = harness.outbox(provider)[0]
     assert request["args"] == {"anything": [1, "two"]}
-    harness.send(
-        provider,
-        {
-            "op": "service_response",
-            "service": "/custom",
-            "id": request["id"],
-            "result": True,
-            "values": {"free": "form"},
-        },
+    respond(
+        harness, provider, request["id"], service="/custom", result=True, values={"free": "form"}
     )
     assert harness.outbox(caller)[0]["values"] == {"free": "form"}
 
@@ -237,39 +196,16 @@ def test_malformed_call_still_gets_an_answer(harness):
 
 
 def test_malformed_provider_response_fails_the_call_at_once(harness):
-    provider = provide(harness)
-    caller = harness.connect()
-    harness.send(caller, {"op": "call_service", "service": "/test_service", "id": 1})
-    request_id = harness.outbox(provider)[0]["id"]
-    harness.send(
-        provider,
-        {
-            "op": "service_response",
-            "service": "/test_service",
-            "id": request_id,
-            "values": {},
-            "result": "yes",
-        },
-    )
+    provider, caller, request_id = pending_call(harness)
+    respond(harness, provider, request_id, values={}, result="yes")
     response = harness.outbox(caller)[0]
     assert response["result"] is False and "result" in response["values"]
 
 
 def test_response_without_result_but_with_values_succeeds(harness):
     """roslibjs leaves `result` out when the provider's handler returns nothing."""
-    provider = provide(harness)
-    caller = harness.connect()
-    harness.send(caller, {"op": "call_service", "service": "/test_service", "id": 1})
-    request_id = harness.outbox(provider)[0]["id"]
-    harness.send(
-        provider,
-        {
-            "op": "service_response",
-            "service": "/test_service",
-            "id": request_id,
-            "values": {"success": True},
-        },
-    )
+    provider, caller, request_id = pending_call(harness)
+    respond(harness, provider, request_id, values={"success": True})
     response = harness.outbox(caller)[0]
     assert response["result"] is True
     assert response["values"] == {"success": True, "message": ""}
