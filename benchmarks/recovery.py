@@ -17,54 +17,19 @@ from __future__ import annotations
 import argparse
 import asyncio
 import os
-import re
 import signal
 import statistics
-import subprocess
 import sys
 import time
 from pathlib import Path
 
+from benchmarks.up_stack import Stack
 from clients import RosbridgeClient
 
 ROOT = Path(__file__).resolve().parents[1]
 
-CONNECT = re.compile(r"connect to (ws://[\d.]+:\d+)")
-STARTED = re.compile(r"\[up\]\s+started (\w+) \(pid (\d+)\)")
 TITLES = ("navigation", "simulator", "bridge")
 IMU_BACK_TARGET_S = 5.0  # the issue's bound from a kill -9 to IMU flowing again
-
-
-class Stack:
-    """`up` as a child process; its output lines tell each component's current pid."""
-
-    def __init__(self) -> None:
-        self.process = subprocess.Popen(
-            [sys.executable, "-m", "clients.stack.up_cli", "--port", "0"],
-            cwd=ROOT,
-            stdout=subprocess.PIPE,
-            stderr=subprocess.STDOUT,
-            text=True,
-            bufsize=1,
-        )
-        self.pids: dict[str, int] = {}
-        self.url = ""
-
-    async def pump(self, ready: asyncio.Event) -> None:
-        assert self.process.stdout is not None
-        while line := await asyncio.to_thread(self.process.stdout.readline):
-            if match := STARTED.search(line):
-                self.pids[match.group(1)] = int(match.group(2))
-            if not self.url and (match := CONNECT.search(line)):
-                self.url = match.group(1)
-                ready.set()
-
-    def stop(self) -> None:
-        self.process.send_signal(signal.SIGINT)
-        try:
-            self.process.wait(60)
-        except subprocess.TimeoutExpired:
-            self.process.kill()
 
 
 async def until(condition, timeout_s: float) -> None:  # type: ignore[no-untyped-def]

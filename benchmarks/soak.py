@@ -23,9 +23,7 @@ import asyncio
 import contextlib
 import csv
 import json
-import re
 import statistics
-import subprocess
 import sys
 import time
 from dataclasses import dataclass, field
@@ -35,10 +33,9 @@ import numpy as np
 import websockets
 from websockets.exceptions import ConnectionClosed
 
+from benchmarks.up_stack import Stack
 from tests.child_process import REPO_ROOT as ROOT
 
-CONNECT = re.compile(r"connect to (ws://[\d.]+:\d+)")
-STARTED = re.compile(r"\[up\]\s+started (\w+) \(pid (\d+)\)")
 PAGE_KIB = 4  # /proc/PID/statm counts pages
 WARM_UP_MINUTES = 2  # imports, caches and buffers settle in the first minutes
 
@@ -61,38 +58,9 @@ def rss_mib(pid: int) -> float:
     return pages * PAGE_KIB / 1024
 
 
-class Stack:
-    """`up` as a child process; its output lines are kept to follow the components' pids."""
-
-    def __init__(self) -> None:
-        self.process = subprocess.Popen(
-            [sys.executable, "-m", "clients.stack.up_cli", "--port", "0"],
-            cwd=ROOT,
-            stdout=subprocess.PIPE,
-            stderr=subprocess.STDOUT,
-            text=True,
-            bufsize=1,
-        )
-        self.pids: dict[str, int] = {"up": self.process.pid}
-        self.url = ""
-
-    async def pump(self, ready: asyncio.Event) -> None:
-        assert self.process.stdout is not None
-        while line := await asyncio.to_thread(self.process.stdout.readline):
-            if match := STARTED.search(line):
-                self.pids[match.group(1)] = int(match.group(2))
-            if not self.url and (match := CONNECT.search(line)):
-                self.url = match.group(1)
-                ready.set()
-            if "restarting it" in line or " ERROR " in line:
-                print(line.rstrip(), flush=True)
-
-    def stop(self) -> None:
-        self.process.send_signal(2)
-        try:
-            self.process.wait(60)
-        except subprocess.TimeoutExpired:
-            self.process.kill()
+def _restart_or_error(line: str) -> bool:
+    """up's lines worth seeing in the soak's log: restarts and errors."""
+    return "restarting it" in line or " ERROR " in line
 
 
 def subscribe(topic: str, type_name: str, compression: str = "cbor") -> str:
@@ -177,7 +145,8 @@ def sample_minute(stack: Stack, samples: Samples, latencies_ms: list[float]) -> 
 
 
 async def soak(minutes: int, vanishing_period_s: float) -> Samples:
-    stack, samples, ready, stop = Stack(), Samples(), asyncio.Event(), asyncio.Event()
+    stack, samples = Stack(echo=_restart_or_error), Samples()
+    ready, stop = asyncio.Event(), asyncio.Event()
     pump = asyncio.create_task(stack.pump(ready))
     try:
         await asyncio.wait_for(ready.wait(), 300)
