@@ -14,13 +14,11 @@ from collections.abc import Callable, Sequence
 
 from bridge.dds.discovery import NodeEntities, nodes_from_discovery_info
 from bridge.dds.naming import DISCOVERY_TOPIC, DISCOVERY_TYPE
-from bridge.dds.outbox import Outbox
-from bridge.dds.participant import DdsParticipant, Pump
+from bridge.dds.participant import DdsPlumbing
 from bridge.dds.qos import DISCOVERY, QosProfile
 from bridge.dds.topic_mirror import type_hash_user_data
 from schemas.codec_cdr import from_cdr, to_cdr
 from schemas.errors import SchemaError
-from schemas.registry import TypeRegistry
 from schemas.values import Message
 
 logger = logging.getLogger("bridge.dds")
@@ -57,18 +55,14 @@ class Announcer:
 
     def __init__(
         self,
-        participant: DdsParticipant,
-        pump: Pump,
-        outbox: Outbox,
-        registry: TypeRegistry,
+        dds: DdsPlumbing,
         node: str,
         on_nodes: NodeUpdate,
     ) -> None:
-        self._participant = participant
-        self._registry = registry
-        self._outbox = outbox
+        self._dds = dds
         self.node = node
         self._on_nodes = on_nodes  # called on the pump thread
+        participant, registry = dds.participant, dds.registry
         data_type = participant.types.message(registry.message(DISCOVERY_TYPE))
         user_data = type_hash_user_data(registry, DISCOVERY_TYPE)
         self._writer = participant.writer(DISCOVERY_TOPIC, data_type, DISCOVERY, user_data)
@@ -76,8 +70,7 @@ class Announcer:
         self._reader = participant.reader(
             DISCOVERY_TOPIC, data_type, QosProfile(transient_local=True, depth=0), user_data
         )
-        pump.watch(self._reader.condition, self._take)
-        self._pump = pump
+        dds.pump.watch(self._reader.condition, self._take)
         self._last: tuple[tuple[bytes, ...], tuple[bytes, ...]] | None = None
 
     def own_endpoints(self) -> tuple[list[bytes], list[bytes]]:
@@ -90,13 +83,13 @@ class Announcer:
         if current == self._last:
             return
         self._last = current
-        msg = participant_entities(self._participant.guid, self.node, *current)
-        cdr = to_cdr(self._registry, DISCOVERY_TYPE, msg)
+        msg = participant_entities(self._dds.participant.guid, self.node, *current)
+        cdr = to_cdr(self._dds.registry, DISCOVERY_TYPE, msg)
 
         def write() -> None:
             self._writer.write(cdr)
 
-        self._outbox.put(("discovery",), write)
+        self._dds.outbox.put(("discovery",), write)
 
     def _take(self) -> Callable[[], None] | None:
         samples = self._reader.take()
@@ -106,17 +99,17 @@ class Announcer:
         def decode() -> None:
             for sample in samples:
                 try:
-                    msg = from_cdr(self._registry, DISCOVERY_TYPE, sample.data)
+                    msg = from_cdr(self._dds.registry, DISCOVERY_TYPE, sample.data)
                 except SchemaError as exc:
                     logger.debug("DDS: unreadable ros_discovery_info: %s", exc)
                     continue
                 participant, nodes = nodes_from_discovery_info(msg)
-                if participant != self._participant.guid:
+                if participant != self._dds.participant.guid:
                     self._on_nodes(participant, nodes)
 
         return decode
 
     def close(self) -> None:
-        self._pump.unwatch(self._reader.condition)
-        self._participant.delete(self._reader.entity)
-        self._participant.delete(self._writer.entity)
+        self._dds.pump.unwatch(self._reader.condition)
+        self._dds.participant.delete(self._reader.entity)
+        self._dds.participant.delete(self._writer.entity)

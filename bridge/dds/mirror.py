@@ -38,7 +38,7 @@ from bridge.dds.discovery import (
 )
 from bridge.dds.graph_sync import GraphSync
 from bridge.dds.outbox import Outbox, WriterThread
-from bridge.dds.participant import DdsParticipant, Pump
+from bridge.dds.participant import DdsParticipant, DdsPlumbing, Pump
 from bridge.dds.qos import QosProfile, advertised_profile, reader_profile, strongest
 from bridge.dds.service_mirror import ServiceMirror
 from bridge.dds.topic_mirror import Arrival, TopicMirror, Wanted
@@ -112,24 +112,10 @@ class DdsMirror:
         self.writer = WriterThread(self.outbox)
         self.pump = Pump(self.participant)
         to_loop = loop.call_soon_threadsafe
-        self.topics = TopicMirror(
-            self.participant,
-            self.pump,
-            self.outbox,
-            self.registry,
-            lambda arrivals: to_loop(self._inject, arrivals),
-        )
-        self.services = ServiceMirror(
-            self.host, self.participant, self.pump, self.outbox, self.node, to_loop
-        )
-        self.announcer = Announcer(
-            self.participant,
-            self.pump,
-            self.outbox,
-            self.registry,
-            self.node,
-            lambda p, n: to_loop(self._nodes_seen, p, n),
-        )
+        dds = DdsPlumbing(self.participant, self.pump, self.outbox, self.registry)
+        self.topics = TopicMirror(dds, lambda arrivals: to_loop(self._inject, arrivals))
+        self.services = ServiceMirror(self.host, dds, self.node, to_loop)
+        self.announcer = Announcer(dds, self.node, lambda p, n: to_loop(self._nodes_seen, p, n))
         for condition in self.participant.discovery_conditions:
             self.pump.watch(condition, self._take_discovery)
 

@@ -49,7 +49,9 @@ from cyclonedds.topic import Topic
 from bridge.dds.cyclone_xml import CycloneSettings, cyclone_xml
 from bridge.dds.discovery import Endpoint, Snapshot
 from bridge.dds.idl_types import IdlTypes
+from bridge.dds.outbox import Outbox
 from bridge.dds.qos import QosProfile
+from schemas.registry import TypeRegistry
 
 logger = logging.getLogger("bridge.dds")
 
@@ -373,3 +375,15 @@ class Pump:
 
     def _still_watched(self, handler: Handler) -> bool:
         return any(h is handler for _, h in self._handlers.values())
+
+
+@dataclass(frozen=True)
+class DdsPlumbing:
+    """What each part of the mirror (topics, services, discovery announcements) works with:
+    the one participant, the pump thread taking its samples, the outbox its writes leave
+    through, and the registry that turns messages into CDR and back."""
+
+    participant: DdsParticipant
+    pump: Pump
+    outbox: Outbox
+    registry: TypeRegistry

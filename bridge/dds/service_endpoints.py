@@ -15,14 +15,12 @@ from collections.abc import Callable
 
 from bridge.dds import request_header
 from bridge.dds.naming import reply_topic, request_topic
-from bridge.dds.outbox import Outbox
-from bridge.dds.participant import DdsParticipant, Pump, RawReader, RawWriter
+from bridge.dds.participant import DdsPlumbing, RawReader, RawWriter
 from bridge.dds.qos import SERVICES
 from bridge.dds.request_header import RequestId
 from bridge.dds.topic_mirror import type_hash_user_data
 from schemas.codec_cdr import from_cdr, to_cdr
 from schemas.errors import SchemaError
-from schemas.registry import TypeRegistry
 from schemas.values import Message
 
 logger = logging.getLogger("bridge.dds")
@@ -41,22 +39,17 @@ class _ServiceEndpoints:
 
     def __init__(
         self,
-        participant: DdsParticipant,
-        pump: Pump,
-        outbox: Outbox,
-        registry: TypeRegistry,
+        dds: DdsPlumbing,
         service: str,
         type_name: str,
         is_server: bool,
         received: Received,
     ) -> None:
+        participant, registry = dds.participant, dds.registry
         spec = registry.service(type_name)
         self.service = service
         self.type_name = spec.name
-        self._registry = registry
-        self._outbox = outbox
-        self._pump = pump
-        self._participant = participant
+        self._dds = dds
         self._received = received  # called on the pump thread
         outgoing, incoming = (
             (spec.response, spec.request) if is_server else (spec.request, spec.response)
@@ -85,18 +78,18 @@ class _ServiceEndpoints:
             SERVICES,
             key + type_hash_user_data(registry, incoming.name),
         )
-        pump.watch(self.reader.condition, self._take)
+        dds.pump.watch(self.reader.condition, self._take)
 
     def send(self, request: RequestId, msg: Message) -> None:
         """Queue a request or reply (serialized and written on the writer thread)."""
 
         def write() -> None:
-            cdr = request_header.wrap(to_cdr(self._registry, self._outgoing, msg), request)
+            cdr = request_header.wrap(to_cdr(self._dds.registry, self._outgoing, msg), request)
             result = self.writer.write(cdr)
             if result < 0:
                 logger.warning("DDS: write for service %s failed (%d)", self.service, result)
 
-        self._outbox.put(("service", self.service, id(self)), write)
+        self._dds.outbox.put(("service", self.service, id(self)), write)
 
     def accepts(self, request: RequestId) -> bool:
         return True
@@ -112,7 +105,7 @@ class _ServiceEndpoints:
                     request, cdr = request_header.unwrap(sample.data)
                     if self.accepts(request):
                         self._received(
-                            self.service, request, from_cdr(self._registry, self._incoming, cdr)
+                            self.service, request, from_cdr(self._dds.registry, self._incoming, cdr)
                         )
                 except (SchemaError, ValueError) as exc:
                     logger.warning("DDS: dropped a sample of service %s: %s", self.service, exc)
@@ -124,9 +117,9 @@ class _ServiceEndpoints:
         return self.reader.guid, self.writer.guid
 
     def close(self) -> None:
-        self._pump.unwatch(self.reader.condition)
-        self._participant.delete(self.reader.entity)
-        self._participant.delete(self.writer.entity)
+        self._dds.pump.unwatch(self.reader.condition)
+        self._dds.participant.delete(self.reader.entity)
+        self._dds.participant.delete(self.writer.entity)
 
 
 class ServiceServer(_ServiceEndpoints):
@@ -134,15 +127,12 @@ class ServiceServer(_ServiceEndpoints):
 
     def __init__(
         self,
-        participant: DdsParticipant,
-        pump: Pump,
-        outbox: Outbox,
-        registry: TypeRegistry,
+        dds: DdsPlumbing,
         service: str,
         type_name: str,
         on_request: Received,
     ) -> None:
-        super().__init__(participant, pump, outbox, registry, service, type_name, True, on_request)
+        super().__init__(dds, service, type_name, True, on_request)
 
 
 class ServiceClient(_ServiceEndpoints):
@@ -150,15 +140,12 @@ class ServiceClient(_ServiceEndpoints):
 
     def __init__(
         self,
-        participant: DdsParticipant,
-        pump: Pump,
-        outbox: Outbox,
-        registry: TypeRegistry,
+        dds: DdsPlumbing,
         service: str,
         type_name: str,
         on_reply: Received,
     ) -> None:
-        super().__init__(participant, pump, outbox, registry, service, type_name, False, on_reply)
+        super().__init__(dds, service, type_name, False, on_reply)
         self._sequence = itertools.count(1)
 
     def request(self, msg: Message) -> RequestId:

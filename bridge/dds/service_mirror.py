@@ -21,8 +21,7 @@ from collections.abc import Callable
 from typing import TypeVar
 
 from bridge.dds.discovery import RemoteService
-from bridge.dds.outbox import Outbox
-from bridge.dds.participant import DdsParticipant, Pump
+from bridge.dds.participant import DdsPlumbing
 from bridge.dds.request_header import RequestId
 from bridge.dds.service_endpoints import Received, ServiceClient, ServiceServer
 from bridge.effects import Send
@@ -43,15 +42,12 @@ class ServiceMirror:
     def __init__(
         self,
         host: PluginHost,
-        participant: DdsParticipant,
-        pump: Pump,
-        outbox: Outbox,
+        dds: DdsPlumbing,
         node: str,
         to_loop: ToLoop,
     ) -> None:
         self._host = host
-        self._participant, self._pump, self._outbox = participant, pump, outbox
-        self._registry, self._to_loop = host.registry, to_loop
+        self._dds, self._to_loop = dds, to_loop
         self.caller = host.connect_internal(node, self._caller_receives, peer="dds")
         self.client_ids = {self.caller}
         self.servers: dict[str, ServiceServer] = {}
@@ -92,10 +88,7 @@ class ServiceMirror:
     ) -> EndpointT | None:
         try:
             return kind(
-                self._participant,
-                self._pump,
-                self._outbox,
-                self._registry,
+                self._dds,
                 name,
                 type_name,
                 lambda *args: self._to_loop(received, *args),

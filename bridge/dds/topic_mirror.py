@@ -13,8 +13,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 from bridge.dds.naming import topic_to_dds
-from bridge.dds.outbox import Outbox
-from bridge.dds.participant import DdsParticipant, Pump, RawReader, RawWriter
+from bridge.dds.participant import DdsPlumbing, RawReader, RawWriter
 from bridge.dds.qos import QosProfile
 from bridge.outgoing import TopicMessage
 from schemas.codec_cdr import from_cdr, to_cdr
@@ -70,16 +69,10 @@ class TopicMirror:
 
     def __init__(
         self,
-        participant: DdsParticipant,
-        pump: Pump,
-        outbox: Outbox,
-        registry: TypeRegistry,
+        dds: DdsPlumbing,
         deliver: Callable[[list[Arrival]], object],
     ) -> None:
-        self._participant = participant
-        self._pump = pump
-        self._outbox = outbox
-        self._registry = registry
+        self._dds = dds
         self._deliver = deliver  # called on the pump thread; must hop to the loop itself
         self.writers: dict[str, _Writer] = {}
         self.readers: dict[str, _Reader] = {}
@@ -91,12 +84,12 @@ class TopicMirror:
         """Make the endpoints match; returns True if any was created or deleted."""
         changed = False
         for topic in [t for t, w in self.writers.items() if writers.get(t) != w.wanted]:
-            self._participant.delete(self.writers.pop(topic).raw.entity)
+            self._dds.participant.delete(self.writers.pop(topic).raw.entity)
             changed = True
         for topic in [t for t, r in self.readers.items() if readers.get(t) != r.wanted]:
             reader = self.readers.pop(topic)
-            self._pump.unwatch(reader.raw.condition)
-            self._participant.delete(reader.raw.entity)
+            self._dds.pump.unwatch(reader.raw.condition)
+            self._dds.participant.delete(reader.raw.entity)
             changed = True
         for topic, wanted in writers.items():
             if topic not in self.writers:
@@ -108,7 +101,7 @@ class TopicMirror:
 
     def _idl_class(self, topic: str, type_name: str) -> type | None:
         try:
-            return self._participant.types.message(self._registry.message(type_name))
+            return self._dds.participant.types.message(self._dds.registry.message(type_name))
         except (SchemaError, ValueError) as exc:
             self._refuse(topic, type_name, str(exc))
             return None
@@ -127,11 +120,11 @@ class TopicMirror:
         if data_type is None:
             return False
         try:
-            raw = self._participant.writer(
+            raw = self._dds.participant.writer(
                 topic_to_dds(topic),
                 data_type,
                 wanted.profile,
-                type_hash_user_data(self._registry, wanted.type_name),
+                type_hash_user_data(self._dds.registry, wanted.type_name),
             )
         except Exception as exc:  # Cyclone refuses e.g. a second type on one topic name
             self._refuse(topic, wanted.type_name, f"cannot create a DDS writer: {exc}")
@@ -150,17 +143,17 @@ class TopicMirror:
         if data_type is None:
             return False
         try:
-            raw = self._participant.reader(
+            raw = self._dds.participant.reader(
                 topic_to_dds(topic),
                 data_type,
                 wanted.profile,
-                type_hash_user_data(self._registry, wanted.type_name),
+                type_hash_user_data(self._dds.registry, wanted.type_name),
             )
         except Exception as exc:
             self._refuse(topic, wanted.type_name, f"cannot create a DDS reader: {exc}")
             return False
         reader = self.readers[topic] = _Reader(wanted, raw, {})
-        self._pump.watch(raw.condition, lambda: self._take(topic, reader))
+        self._dds.pump.watch(raw.condition, lambda: self._take(topic, reader))
         logger.info(
             "DDS: reading %s (%s; %s)",
             topic_to_dds(topic),
@@ -186,7 +179,7 @@ class TopicMirror:
         writer = self.writers.get(message.topic)
         if writer is None or writer.wanted.type_name != message.type_name:
             return False
-        self._outbox.put(
+        self._dds.outbox.put(
             ("topic", message.topic), lambda: self._write(writer.raw, message), message.size_hint
         )
         return True
@@ -211,7 +204,7 @@ class TopicMirror:
             arrivals = []
             for sample, guid in zip(samples, guids, strict=True):
                 try:
-                    msg = from_cdr(self._registry, reader.wanted.type_name, sample.data)
+                    msg = from_cdr(self._dds.registry, reader.wanted.type_name, sample.data)
                 except SchemaError as exc:
                     logger.warning("DDS: dropped a sample on %s: %s", topic, exc)
                     continue
