@@ -11,7 +11,6 @@ each plug-in.
 from __future__ import annotations
 
 import asyncio
-import contextlib
 import logging
 import time
 from collections.abc import Callable, Coroutine, Iterable, Mapping
@@ -27,6 +26,7 @@ from bridge.rosapi.common import RosapiHandler, RosapiService
 from bridge.session import ClientSession
 from bridge.sinks import MessageSink
 from schemas.registry import TypeRegistry
+from schemas.runtime.event_loop import cancel_and_wait
 from schemas.values import JsonObject, OpId
 
 logger = logging.getLogger("bridge.host")
@@ -129,12 +129,7 @@ class PluginHost:
 
     async def close(self) -> None:
         """Cancel what `spawn` started and wait for it to end."""
-        tasks = list(self._tasks)
-        for task in tasks:
-            task.cancel()
-        for task in tasks:
-            with contextlib.suppress(asyncio.CancelledError):
-                await task
+        await cancel_and_wait(list(self._tasks))
 
     # -- core calls: how a plug-in changes the graph ------------------------------------------
 

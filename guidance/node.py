@@ -18,7 +18,6 @@ slows, then stops), the pose going stale (stop), a person taking over (/cmd_wren
 from __future__ import annotations
 
 import asyncio
-import contextlib
 import logging
 import time
 from collections.abc import Callable
@@ -46,6 +45,7 @@ from guidance.messages import (
 from guidance.path import Route
 from guidance.pilot import Decision, Pilot, Situation, VesselPose
 from schemas.catalogue import TOPICS
+from schemas.runtime.event_loop import run_until_set
 from schemas.runtime.process import freeze_startup_heap, tune_process
 from schemas.tracing import header_stamp_ns
 
@@ -137,14 +137,7 @@ class GuidanceNode:
         tasks = [asyncio.create_task(r) for r in readers]
         tasks.append(asyncio.create_task(self._control_loop()))
         tasks.append(asyncio.create_task(self._status_loop()))
-        try:
-            await stop.wait()
-        finally:
-            for task in tasks:
-                task.cancel()
-            for task in tasks:
-                with contextlib.suppress(asyncio.CancelledError):
-                    await task
+        await run_until_set(stop, tasks)
 
     async def _read(self, subscription: Subscription, handle: Callable[[str, Any], None]) -> None:
         async for received in subscription:

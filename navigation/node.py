@@ -12,7 +12,6 @@ map and the diagnostics are published on timers.
 from __future__ import annotations
 
 import asyncio
-import contextlib
 import logging
 import time
 from collections.abc import Callable
@@ -33,6 +32,7 @@ from navigation.processors import (
     Processors,
 )
 from schemas.catalogue import TOPICS, consumed_by, period_s
+from schemas.runtime.event_loop import run_until_set
 from schemas.runtime.periodic import every
 from schemas.runtime.process import background_priority
 from schemas.tracing import header_stamp_ns
@@ -116,14 +116,7 @@ class NavigationNode:
             asyncio.create_task(every(map_period_s, self._publish_map, phase=1.0)),
             asyncio.create_task(every(DIAGNOSTICS_PERIOD_S, self._publish_diagnostics, phase=1.0)),
         ]
-        try:
-            await stop.wait()
-        finally:
-            for task in tasks:
-                task.cancel()
-            for task in tasks:
-                with contextlib.suppress(asyncio.CancelledError):
-                    await task
+        await run_until_set(stop, tasks)
 
     async def _sensor_loop(self, name: str) -> None:
         """Take the newest message, process it on the sensor's thread, publish the outputs."""

@@ -1,5 +1,5 @@
-"""What the command lines of riverbridge's nodes share (simulator, navigation; `record` and
-`play` take the client options and the shutdown).
+"""What the command lines of riverbridge's nodes share (simulator, navigation, guidance; `record`
+and `play` take the client options and the shutdown).
 
 A node is a rosbridge client configured by a TOML file: the same connection options, the same
 exit codes (0 a clean stop, 2 a bad config, 1 an unreachable bridge) and the same shutdown on

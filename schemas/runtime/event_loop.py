@@ -13,8 +13,9 @@ rate, but a full CBOR scan fanned out to 16 subscribers arrived later than on as
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import os
-from collections.abc import Callable, Coroutine, Mapping
+from collections.abc import Callable, Coroutine, Mapping, Sequence
 from typing import Any, TypeVar
 
 T = TypeVar("T")
@@ -71,3 +72,20 @@ def running_loop_name() -> str:
     """The running loop's name, "uvloop" or "asyncio" (for log lines and benchmarks)."""
     module = type(asyncio.get_running_loop()).__module__
     return "uvloop" if module.startswith("uvloop") else "asyncio"
+
+
+async def cancel_and_wait(tasks: Sequence[asyncio.Task[Any]]) -> None:
+    """Cancel `tasks`, then wait for each to end: how a process stops what it started."""
+    for task in tasks:
+        task.cancel()
+    for task in tasks:
+        with contextlib.suppress(asyncio.CancelledError):
+            await task
+
+
+async def run_until_set(stop: asyncio.Event, tasks: Sequence[asyncio.Task[Any]]) -> None:
+    """A node's life: `tasks` run until `stop` is set (or this is cancelled), then end."""
+    try:
+        await stop.wait()
+    finally:
+        await cancel_and_wait(tasks)
