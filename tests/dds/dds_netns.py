@@ -94,13 +94,9 @@ class LinkShape:
 
 def shape_link(host: Host, shape: LinkShape) -> str:
     """Shape `host`'s outgoing traffic; returns what was applied (netem, or the fallback)."""
+    root_qdisc = ["tc", "qdisc", "add", "dev", host.interface, "root"]
     netem = [
-        "tc",
-        "qdisc",
-        "add",
-        "dev",
-        host.interface,
-        "root",
+        *root_qdisc,
         "netem",
         "delay",
         f"{shape.delay_ms}ms",
@@ -116,12 +112,7 @@ def shape_link(host: Host, shape: LinkShape) -> str:
         return f"netem: {shape.describe()}"
     burst_bytes = max(32 * 1024, int(shape.rate_mbit * 1e6 / 8 / 100))  # ~10 ms of traffic
     tbf = [
-        "tc",
-        "qdisc",
-        "add",
-        "dev",
-        host.interface,
-        "root",
+        *root_qdisc,
         "tbf",
         "rate",
         f"{shape.rate_mbit}mbit",

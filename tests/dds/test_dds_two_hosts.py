@@ -48,6 +48,11 @@ def bridge_argv(host: Host, peer: Host, domain: int) -> list[str]:
     )
 
 
+def roslibpy_argv(host: Host, port: str, *scenario: str) -> list[str]:
+    """roslibpy (PyPI) in `host`'s namespace, running a scenario against the bridge at `port`."""
+    return host.command([sys.executable, str(ROSLIBPY_HOST), "127.0.0.1", port, *scenario])
+
+
 def start(argv: list[str], cwd: Path | None = None) -> subprocess.Popen[str]:
     return subprocess.Popen(
         argv, cwd=cwd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
@@ -100,19 +105,7 @@ def test_roslibpy_on_host_a_reaches_roslibjs_on_host_b_through_dds(dds_domain):
                 ),
                 cwd=JS_DIR,
             ),
-            start(
-                a.command(
-                    [
-                        sys.executable,
-                        str(ROSLIBPY_HOST),
-                        "127.0.0.1",
-                        port_a,
-                        "publish",
-                        "/chatter",
-                        "90",
-                    ]
-                )
-            ),
+            start(roslibpy_argv(a, port_a, "publish", "/chatter", "90")),
         ]
         try:
             received = result_of(clients[0])
@@ -124,21 +117,7 @@ def test_roslibpy_on_host_a_reaches_roslibjs_on_host_b_through_dds(dds_domain):
                     cwd=JS_DIR,
                 )
             )
-            called = result_of(
-                start(
-                    a.command(
-                        [
-                            sys.executable,
-                            str(ROSLIBPY_HOST),
-                            "127.0.0.1",
-                            port_a,
-                            "call",
-                            "/lock_gate",
-                            "90",
-                        ]
-                    )
-                )
-            )
+            called = result_of(start(roslibpy_argv(a, port_a, "call", "/lock_gate", "90")))
             provided = result_of(clients[1])
         finally:
             for process in clients:
