@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from clients import RosbridgeClient
+from tests.navigation.nav_scenes import radar_image_of
 
 OCCUPIED = 100  # nav_msgs/msg/OccupancyGrid: certainly an obstacle
 # A radar detection is marked at its cell's centre: 4 m cells of 5 deg, ~4 m across at 50 m,
@@ -93,21 +94,7 @@ def radar_echo(beam: int, cell: int, stamp_ns: int) -> dict[str, Any]:
     beams, cells = 72, 25
     image = np.zeros((beams, cells), np.float32)
     image[beam, cell] = 100.0
-    return {
-        "header": {
-            "stamp": {"sec": stamp_ns // 10**9, "nanosec": stamp_ns % 10**9},
-            "frame_id": "radar",
-        },
-        "azimuth_min_rad": 0.0,
-        "azimuth_step_rad": float(np.float32(2 * math.pi / beams)),
-        "beam_width_azimuth_rad": float(np.float32(math.radians(5.0))),
-        "beam_width_elevation_rad": float(np.float32(math.radians(15.0))),
-        "range_min_m": 0.0,
-        "range_step_m": 4.0,
-        "num_beams": beams,
-        "num_cells": cells,
-        "reflectance": image.reshape(-1),
-    }
+    return radar_image_of(image, stamp_ns, 4.0)
 
 
 def echo_xy_m(beam: int, cell: int) -> np.ndarray:

@@ -133,6 +133,24 @@ def radar_noise_image(
     return rng.exponential(mean_power, size=(n_beams, n_cells)).astype(np.float32)
 
 
+def radar_image_of(power: np.ndarray, stamp_ns: int, range_step_m: float) -> dict[str, Any]:
+    """A RadarImage carrying `power` (beams x cells) with beams evenly over the full circle,
+    5 deg wide by 15 deg high, from range 0."""
+    beams, cells = power.shape
+    return {
+        "header": header_msg(stamp_ns, "radar"),
+        "azimuth_min_rad": 0.0,
+        "azimuth_step_rad": float(np.float32(2 * np.pi / beams)),
+        "beam_width_azimuth_rad": float(np.float32(np.deg2rad(5.0))),
+        "beam_width_elevation_rad": float(np.float32(np.deg2rad(15.0))),
+        "range_min_m": 0.0,
+        "range_step_m": range_step_m,
+        "num_beams": beams,
+        "num_cells": cells,
+        "reflectance": power.reshape(-1),
+    }
+
+
 def radar_image_msg(
     stamp_ns: int, n_cells: int, range_step_m: float, target_cell: int
 ) -> dict[str, Any]:
@@ -140,18 +158,7 @@ def radar_image_msg(
     return (power 500) at beam 18 (90 deg), cell `target_cell`."""
     power = radar_noise_image(72, n_cells, 1.0, seed=1)
     power[18, target_cell] = 500.0
-    return {
-        "header": header_msg(stamp_ns, "radar"),
-        "azimuth_min_rad": 0.0,
-        "azimuth_step_rad": float(np.float32(np.deg2rad(5.0))),
-        "beam_width_azimuth_rad": float(np.float32(np.deg2rad(5.0))),
-        "beam_width_elevation_rad": float(np.float32(np.deg2rad(15.0))),
-        "range_min_m": 0.0,
-        "range_step_m": range_step_m,
-        "num_beams": 72,
-        "num_cells": n_cells,
-        "reflectance": power.reshape(-1),
-    }
+    return radar_image_of(power, stamp_ns, range_step_m)
 
 
 def camera_line_msg(stamp_ns: int, width_px: int, height_px: int) -> dict[str, Any]:

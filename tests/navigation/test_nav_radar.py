@@ -7,7 +7,6 @@ import pytest
 
 from navigation.cfar import CfarDetector
 from navigation.config import CfarConfig
-from navigation.messages import header_msg
 from navigation.radar import (
     PolarGeometry,
     detect,
@@ -15,23 +14,11 @@ from navigation.radar import (
     radar_power,
     target_labels,
 )
-from tests.navigation.nav_scenes import radar_noise_image
+from tests.navigation.nav_scenes import radar_image_of, radar_noise_image
 
 
 def radar_image_msg(power: np.ndarray) -> dict:
-    beams, cells = power.shape
-    return {
-        "header": header_msg(3_000_000_000, "radar"),
-        "azimuth_min_rad": 0.0,
-        "azimuth_step_rad": float(np.float32(2 * np.pi / beams)),
-        "beam_width_azimuth_rad": float(np.float32(np.deg2rad(5.0))),
-        "beam_width_elevation_rad": float(np.float32(np.deg2rad(15.0))),
-        "range_min_m": 0.0,
-        "range_step_m": 0.25,
-        "num_beams": beams,
-        "num_cells": cells,
-        "reflectance": power.reshape(-1),
-    }
+    return radar_image_of(power, 3_000_000_000, 0.25)
 
 
 def test_targets_come_out_at_their_cartesian_position(check_canonical):
