@@ -35,17 +35,18 @@ def test_toml_overrides_and_keeps_defaults(tmp_path):
     assert cfg.vessel.current_velocity_mps == (0.4, 0.0)
 
 
-def test_unknown_field_is_named(tmp_path):
+@pytest.mark.parametrize(
+    ("toml", "field"),
+    [
+        ("[lidar]\nrange_maximum = 120.0\n", "range_maximum"),
+        ('[camera]\nwidth_px = "wide"\n', "width_px"),
+    ],
+    ids=["unknown field", "wrong type"],
+)
+def test_a_bad_field_is_named(tmp_path, toml, field):
     path = tmp_path / "sim.toml"
-    path.write_text("[lidar]\nrange_maximum = 120.0\n")
-    with pytest.raises(pydantic.ValidationError, match="range_maximum"):
-        load_config(path)
-
-
-def test_wrong_type_is_named(tmp_path):
-    path = tmp_path / "sim.toml"
-    path.write_text('[camera]\nwidth_px = "wide"\n')
-    with pytest.raises(pydantic.ValidationError, match="width_px"):
+    path.write_text(toml)
+    with pytest.raises(pydantic.ValidationError, match=field):
         load_config(path)
 
 
