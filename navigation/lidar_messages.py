@@ -11,10 +11,8 @@ import numpy as np
 
 from navigation.boxes import Boxes
 from navigation.messages import cluster_colors, header_msg, point_msg
+from schemas.markers import MARKER_ADD, MARKER_CUBE, MARKER_DELETEALL, marker_msg
 
-MARKER_CUBE = 1  # visualization_msgs/msg/Marker.CUBE
-MARKER_ADD = 0  # visualization_msgs/msg/Marker.ADD
-MARKER_DELETEALL = 3  # visualization_msgs/msg/Marker.DELETEALL
 MARKER_ALPHA = 0.5  # see-through, so the cloud stays visible under the boxes
 
 
@@ -47,30 +45,7 @@ def _marker(
     stamp_ns: int, frame_id: str, ns: str, marker_id: int, marker_type: int, action: int
 ) -> dict[str, Any]:
     """A canonical ``visualization_msgs/msg/Marker`` with every field at its default."""
-    return {
-        "header": header_msg(stamp_ns, frame_id),
-        "ns": ns,
-        "id": marker_id,
-        "type": marker_type,
-        "action": action,
-        "pose": {
-            "position": point_msg(0.0, 0.0, 0.0),
-            "orientation": {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0},
-        },
-        "scale": {"x": 0.0, "y": 0.0, "z": 0.0},
-        "color": {"r": 0.0, "g": 0.0, "b": 0.0, "a": 0.0},
-        "lifetime": {"sec": 0, "nanosec": 0},
-        "frame_locked": False,
-        "points": [],
-        "colors": [],
-        "texture_resource": "",
-        "texture": {"header": header_msg(0, ""), "format": "", "data": b""},
-        "uv_coordinates": [],
-        "text": "",
-        "mesh_resource": "",
-        "mesh_file": {"filename": "", "data": b""},
-        "mesh_use_embedded_materials": False,
-    }
+    return marker_msg(header_msg(stamp_ns, frame_id), ns, marker_id, marker_type, action)
 
 
 def marker_array_msg(

@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from schemas.markers import MARKER_ADD, MARKER_CUBE, marker_msg
 from schemas.values import Message
 from simulator.config import LidarConfig, RadarConfig
 from simulator.frames import Pose2D, quaternion_from_yaw, sensor_pose_in_map
@@ -26,7 +27,6 @@ if TYPE_CHECKING:
 
 TRUTH_TYPE = "riverbridge_msgs/msg/GroundTruthArray"
 MARKERS_TYPE = "visualization_msgs/msg/MarkerArray"
-MARKER_CUBE, MARKER_ADD = 1, 0  # visualization_msgs/msg/Marker constants
 KIND_COLOURS = {
     "vessel": (1.0, 0.3, 0.2),
     "buoy": (1.0, 0.5, 0.0),
@@ -165,28 +165,17 @@ def _marker(
     rgb: tuple[float, float, float],
 ) -> dict[str, Any]:
     """A canonical visualization_msgs/msg/Marker CUBE with every other field at its default."""
-    return {
-        "header": header(stamp_ns, MAP_FRAME),
-        "ns": ns,
-        "id": marker_id,
-        "type": MARKER_CUBE,
-        "action": MARKER_ADD,
-        "pose": pose,
-        "scale": scale,
+    return marker_msg(
+        header(stamp_ns, MAP_FRAME),
+        ns,
+        marker_id,
+        MARKER_CUBE,
+        MARKER_ADD,
+        pose=pose,
+        scale=scale,
         # ColorRGBA is float32: values that float32 holds exactly keep every encoding equal
-        "color": {"r": _f32(rgb[0]), "g": _f32(rgb[1]), "b": _f32(rgb[2]), "a": _f32(0.4)},
-        "lifetime": {"sec": 0, "nanosec": 0},
-        "frame_locked": False,
-        "points": [],
-        "colors": [],
-        "texture_resource": "",
-        "texture": {"header": header(0, ""), "format": "", "data": b""},
-        "uv_coordinates": [],
-        "text": "",
-        "mesh_resource": "",
-        "mesh_file": {"filename": "", "data": b""},
-        "mesh_use_embedded_materials": False,
-    }
+        color={"r": _f32(rgb[0]), "g": _f32(rgb[1]), "b": _f32(rgb[2]), "a": _f32(0.4)},
+    )
 
 
 def _f32(value: float) -> float:
