@@ -1,14 +1,16 @@
-"""The simulator's and navigation's command lines refuse bad shared options by name (exit 2)."""
+"""The command lines of the simulator, navigation and guidance (one `node_main`) refuse bad
+shared options by name (exit 2)."""
 
 from __future__ import annotations
 
 import pytest
 
+from guidance import cli as guidance_cli
 from navigation import cli as nav_cli
 from simulator import cli as sim_cli
 from tests.cli_checks import assert_refused
 
-MAINS = {"simulator": sim_cli.main, "navigation": nav_cli.main}
+MAINS = {"simulator": sim_cli.main, "navigation": nav_cli.main, "guidance": guidance_cli.main}
 
 
 @pytest.mark.parametrize("node", MAINS)
