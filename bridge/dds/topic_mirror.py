@@ -11,6 +11,7 @@ from __future__ import annotations
 import logging
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import TypeVar
 
 from bridge.dds.naming import topic_to_dds
 from bridge.dds.participant import DdsPlumbing, RawReader, RawWriter
@@ -22,6 +23,7 @@ from schemas.registry import TypeRegistry
 from schemas.values import Message
 
 logger = logging.getLogger("bridge.dds")
+EndpointT = TypeVar("EndpointT", RawWriter, RawReader)
 
 
 @dataclass(frozen=True)
@@ -116,51 +118,50 @@ class TopicMirror:
             logger.warning("DDS: topic %s (%s) is not mirrored: %s", topic, type_name, why)
 
     def _add_writer(self, topic: str, wanted: Wanted) -> bool:
+        raw = self._open(topic, wanted, self._dds.participant.writer, "writer")
+        if raw is None:
+            return False
+        self.writers[topic] = _Writer(wanted, raw)
+        return True
+
+    def _add_reader(self, topic: str, wanted: Wanted) -> bool:
+        raw = self._open(topic, wanted, self._dds.participant.reader, "reader")
+        if raw is None:
+            return False
+        reader = self.readers[topic] = _Reader(wanted, raw, {})
+        self._dds.pump.watch(raw.condition, lambda: self._take(topic, reader))
+        return True
+
+    def _open(
+        self,
+        topic: str,
+        wanted: Wanted,
+        create: Callable[[str, type, QosProfile, str], EndpointT],
+        kind: str,
+    ) -> EndpointT | None:
+        """A DDS `kind` ("writer" or "reader") of `topic` made by `create`, or None (refused
+        and logged once: a type with no DDS form, or Cyclone's refusal)."""
         data_type = self._idl_class(topic, wanted.type_name)
         if data_type is None:
-            return False
+            return None
         try:
-            raw = self._dds.participant.writer(
+            raw = create(
                 topic_to_dds(topic),
                 data_type,
                 wanted.profile,
                 type_hash_user_data(self._dds.registry, wanted.type_name),
             )
         except Exception as exc:  # Cyclone refuses e.g. a second type on one topic name
-            self._refuse(topic, wanted.type_name, f"cannot create a DDS writer: {exc}")
-            return False
-        self.writers[topic] = _Writer(wanted, raw)
+            self._refuse(topic, wanted.type_name, f"cannot create a DDS {kind}: {exc}")
+            return None
         logger.info(
-            "DDS: writing %s (%s; %s)",
+            "DDS: %s %s (%s; %s)",
+            "writing" if kind == "writer" else "reading",
             topic_to_dds(topic),
             wanted.type_name,
             wanted.profile.describe(),
         )
-        return True
-
-    def _add_reader(self, topic: str, wanted: Wanted) -> bool:
-        data_type = self._idl_class(topic, wanted.type_name)
-        if data_type is None:
-            return False
-        try:
-            raw = self._dds.participant.reader(
-                topic_to_dds(topic),
-                data_type,
-                wanted.profile,
-                type_hash_user_data(self._dds.registry, wanted.type_name),
-            )
-        except Exception as exc:
-            self._refuse(topic, wanted.type_name, f"cannot create a DDS reader: {exc}")
-            return False
-        reader = self.readers[topic] = _Reader(wanted, raw, {})
-        self._dds.pump.watch(raw.condition, lambda: self._take(topic, reader))
-        logger.info(
-            "DDS: reading %s (%s; %s)",
-            topic_to_dds(topic),
-            wanted.type_name,
-            wanted.profile.describe(),
-        )
-        return True
+        return raw
 
     def close(self) -> None:
         self.sync({}, {})
