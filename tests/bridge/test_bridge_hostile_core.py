@@ -7,6 +7,7 @@ bridge: values that decode but cannot be encoded again, unbounded echoes, log fl
 from __future__ import annotations
 
 import logging
+from typing import Any
 
 import cbor2
 import pytest
@@ -33,6 +34,14 @@ def assert_everything_sent_encodes(h: CoreHarness) -> None:
         for send in sends:
             render(send.item, send.fragment_size, "f")  # raises if it could not be sent
         h.sends[client] = sends
+
+
+def only_answer(h: CoreHarness, frame: dict[str, Any] | str) -> dict[str, Any]:
+    """The one frame a new client gets back for sending `frame`."""
+    caller = h.connect()
+    h.send(caller, frame)
+    [answer] = h.outbox(caller)
+    return answer
 
 
 def provider_and_caller(h: CoreHarness) -> tuple[int, int, str]:
@@ -92,21 +101,18 @@ def test_a_providers_unencodable_answer_fails_its_callers_call(harness):
 
 
 def test_a_refused_call_is_still_answered_with_its_id(harness):
-    caller = harness.connect()
-    harness.send(
-        caller, '{"op":"call_service","service":"/rosapi/topics","id":"x","args":{"bad":"\\ud800"}}'
+    answer = only_answer(
+        harness,
+        '{"op":"call_service","service":"/rosapi/topics","id":"x","args":{"bad":"\\ud800"}}',
     )
-    [answer] = harness.outbox(caller)
     assert (answer["id"], answer["result"]) == ("x", False)
 
 
 @pytest.mark.parametrize("timeout", ["1e400", "-1e400", "NaN"])
 def test_a_non_finite_timeout_fails_the_call_cleanly(harness, timeout):
-    caller = harness.connect()
-    harness.send(
-        caller, f'{{"op":"call_service","service":"/rosapi/topics","id":"t","timeout":{timeout}}}'
+    answer = only_answer(
+        harness, f'{{"op":"call_service","service":"/rosapi/topics","id":"t","timeout":{timeout}}}'
     )
-    [answer] = harness.outbox(caller)
     assert answer["result"] is False and "timeout" in answer["values"]
 
 
@@ -123,21 +129,18 @@ def test_integers_are_checked_against_the_ros_field_type(harness):
 
 
 def test_deep_nesting_is_refused(harness):
-    caller = harness.connect()
     deep = "[" * 300 + "]" * 300
-    harness.send(
-        caller, f'{{"op":"call_service","service":"/rosapi/topics","id":"d","args":{{"x":{deep}}}}}'
+    answer = only_answer(
+        harness,
+        f'{{"op":"call_service","service":"/rosapi/topics","id":"d","args":{{"x":{deep}}}}}',
     )
-    [answer] = harness.outbox(caller)
     assert answer["result"] is False and "nesting deeper" in answer["values"]
 
 
 def test_a_long_id_is_refused_and_not_echoed(harness):
-    caller = harness.connect()
-    harness.send(
-        caller, {"op": "call_service", "service": "/rosapi/topics", "id": "i" * (MAX_ID_CHARS + 1)}
+    answer = only_answer(
+        harness, {"op": "call_service", "service": "/rosapi/topics", "id": "i" * (MAX_ID_CHARS + 1)}
     )
-    [answer] = harness.outbox(caller)
     assert answer["result"] is False and "id" not in answer
     assert len(answer["values"]) < 500
 
@@ -183,9 +186,7 @@ def test_a_bug_in_a_handler_costs_one_op_not_the_connection(harness, caplog_core
         raise RuntimeError("boom")
 
     monkeypatch.setitem(core.OP_ROUTES, "call_service", route(CallService, broken))
-    caller = harness.connect()
-    harness.send(caller, {"op": "call_service", "service": "/rosapi/topics", "id": "b"})
-    [answer] = harness.outbox(caller)
+    answer = only_answer(harness, {"op": "call_service", "service": "/rosapi/topics", "id": "b"})
     assert answer["result"] is False and "internal error" in answer["values"]
     assert not [c for c in harness.closes if isinstance(c, Close)]
     [line] = core_lines(caplog_core)
