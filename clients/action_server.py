@@ -17,6 +17,7 @@ from clients.actions import normalize_action_values
 from clients.errors import ConnectionClosed
 from clients.events import GoalCancel, GoalRequest
 from clients.protocol import ClientProtocol
+from clients.services import HandlerHost
 from clients.wire import Frame
 from schemas.registry import TypeRegistry
 
@@ -29,23 +30,13 @@ Feedback = Callable[[dict[str, Any]], Awaitable[None]]
 ActionHandler = Callable[[dict[str, Any], Feedback], Awaitable[dict[str, Any] | None]]
 
 
-class ActionHost:
+class ActionHost(HandlerHost[ActionHandler]):
     """Runs goal handlers for advertised actions and answers feedback, result and cancel."""
 
     def __init__(self, registry: TypeRegistry, send: Callable[[Frame], Awaitable[None]]) -> None:
-        self._registry = registry
-        self._send = send
-        self._handlers: dict[str, tuple[ActionHandler, str]] = {}
+        super().__init__(registry, send)
         self._running: dict[str, asyncio.Task[None]] = {}
         self._cancel_requested: set[str] = set()
-
-    def add(self, action: str, type: str, handler: ActionHandler) -> None:
-        """Route goals of ``action`` to ``handler``."""
-        self._handlers[action] = (handler, type)
-
-    def remove(self, action: str) -> None:
-        """Stop accepting goals for ``action`` (running goals finish)."""
-        self._handlers.pop(action, None)
 
     def start(self, goal: GoalRequest) -> None:
         """Run the handler of ``goal`` in a new task (called from the reader)."""
@@ -89,9 +80,5 @@ class ActionHost:
         except ConnectionClosed as exc:
             logger.warning("could not answer goal %s: %s", goal.goal_id, exc)
 
-    async def cancel_all(self) -> None:
-        """Cancel every running goal (client closing)."""
-        tasks = list(self._running.values())
-        for task in tasks:
-            task.cancel()
-        await asyncio.gather(*tasks, return_exceptions=True)
+    def _running_tasks(self) -> list[asyncio.Task[None]]:
+        return list(self._running.values())

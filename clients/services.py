@@ -6,7 +6,7 @@ import asyncio
 import logging
 import time
 from collections.abc import Awaitable, Callable
-from typing import Any, Literal
+from typing import Any, Generic, Literal, TypeVar
 
 from clients.errors import ConnectionClosed
 from clients.events import ServiceRequest
@@ -18,6 +18,7 @@ from schemas.registry import TypeRegistry
 logger = logging.getLogger(__name__)
 
 Handler = Callable[[dict[str, Any]], Awaitable[dict[str, Any] | None]]
+HandlerT = TypeVar("HandlerT")
 
 
 def normalize_service_values(
@@ -30,7 +31,36 @@ def normalize_service_values(
     return normalize(spec, values, now_ns=time.time_ns())
 
 
-class ServiceHost:
+class HandlerHost(Generic[HandlerT]):
+    """What serving services and serving actions share: a handler and its type per name, the
+    registry requests are normalised with, the send answers leave through, and the tasks
+    still running (cancelled when the client closes)."""
+
+    def __init__(self, registry: TypeRegistry, send: Callable[[Frame], Awaitable[None]]) -> None:
+        self._registry = registry
+        self._send = send
+        self._handlers: dict[str, tuple[HandlerT, str]] = {}
+
+    def add(self, name: str, type: str, handler: HandlerT) -> None:
+        """Route the calls or goals of ``name`` to ``handler`` (replacing any previous one)."""
+        self._handlers[name] = (handler, type)
+
+    def remove(self, name: str) -> None:
+        """Stop serving ``name``; calls and goals already running still answer."""
+        self._handlers.pop(name, None)
+
+    def _running_tasks(self) -> list[asyncio.Task[None]]:
+        raise NotImplementedError
+
+    async def cancel_all(self) -> None:
+        """Cancel running handlers (client closing)."""
+        tasks = self._running_tasks()
+        for task in tasks:
+            task.cancel()
+        await asyncio.gather(*tasks, return_exceptions=True)
+
+
+class ServiceHost(HandlerHost[Handler]):
     """Runs the handler of each incoming ``call_service`` in its own task and answers it.
 
     Handlers of concurrent calls run concurrently; a slow handler delays only its own caller.
@@ -39,18 +69,8 @@ class ServiceHost:
     """
 
     def __init__(self, registry: TypeRegistry, send: Callable[[Frame], Awaitable[None]]) -> None:
-        self._registry = registry
-        self._send = send
-        self._handlers: dict[str, tuple[Handler, str]] = {}
+        super().__init__(registry, send)
         self._tasks: set[asyncio.Task[None]] = set()
-
-    def add(self, service: str, type: str, handler: Handler) -> None:
-        """Route calls of ``service`` to ``handler`` (replacing any previous one)."""
-        self._handlers[service] = (handler, type)
-
-    def remove(self, service: str) -> None:
-        """Stop serving ``service``; calls already running still answer."""
-        self._handlers.pop(service, None)
 
     def serve(self, request: ServiceRequest) -> None:
         """Start answering ``request`` (called from the reader; never blocks it)."""
@@ -79,9 +99,5 @@ class ServiceHost:
                 "could not answer %s (id %s): %s", request.service, request.request_id, exc
             )
 
-    async def cancel_all(self) -> None:
-        """Cancel running handlers (client closing)."""
-        tasks = list(self._tasks)
-        for task in tasks:
-            task.cancel()
-        await asyncio.gather(*tasks, return_exceptions=True)
+    def _running_tasks(self) -> list[asyncio.Task[None]]:
+        return list(self._tasks)
