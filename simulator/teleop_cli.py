@@ -25,6 +25,7 @@ from collections.abc import Iterator
 from typing import TextIO
 
 from clients import ConnectionFailed, RosbridgeClient
+from clients.node.cli import add_client_arguments
 from schemas.catalogue import TOPICS
 from simulator.config import SimConfig, load_config
 from simulator.teleop import Action, KeyDecoder, TeleopCommand, TeleopScale
@@ -58,17 +59,11 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--encoding", choices=("cbor", "json"), default="cbor")
     parser.add_argument(
-        "--connect-timeout",
-        type=float,
-        default=10.0,
-        help="seconds to keep retrying the first connection",
-    )
-    parser.add_argument(
         "--stdin-keys",
         action="store_true",
         help="read keys from stdin even when it is not a terminal (a pipe)",
     )
-    parser.add_argument("--log-level", default="WARNING")
+    add_client_arguments(parser, log_level="WARNING")  # the terminal is the teleop's display
     return parser
 
 

@@ -111,8 +111,9 @@ def positive_number(text: str) -> float:
     return _number(text, "number", positive=True)
 
 
-def add_client_arguments(parser: argparse.ArgumentParser) -> None:
-    """--connect-timeout and --log-level, as every riverbridge client command takes them."""
+def add_client_arguments(parser: argparse.ArgumentParser, log_level: str = "INFO") -> None:
+    """--connect-timeout and --log-level (default `log_level`), as every riverbridge client
+    command takes them."""
     parser.add_argument(
         "--connect-timeout",
         type=non_negative_seconds,
@@ -121,7 +122,7 @@ def add_client_arguments(parser: argparse.ArgumentParser) -> None:
         help="seconds to keep trying to reach the bridge (default %(default)s)",
     )
     parser.add_argument(
-        "--log-level", type=str.upper, default="INFO", choices=LOG_LEVELS, metavar="LEVEL"
+        "--log-level", type=str.upper, default=log_level, choices=LOG_LEVELS, metavar="LEVEL"
     )
 
 
