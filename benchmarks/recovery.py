@@ -25,6 +25,7 @@ from pathlib import Path
 
 from benchmarks.up_stack import Stack
 from clients import RosbridgeClient
+from tests.launcher.sensor_data import imu_flowed, record_imu_arrivals
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -48,18 +49,11 @@ async def measure(rounds: int, settle_s: float) -> dict[str, list[tuple[float, f
     try:
         await asyncio.wait_for(ready.wait(), 300)
         async with RosbridgeClient(stack.url, encoding="cbor", backoff_max=0.25) as client:
-            sub = await client.subscribe("/imu/data", "sensor_msgs/msg/Imu")
-
-            async def collect() -> None:
-                async for received in sub:
-                    stamp = received.msg["header"]["stamp"]
-                    arrivals.append((time.time(), stamp["sec"] + stamp["nanosec"] / 1e9))
-
-            collector = asyncio.create_task(collect())
+            collector = await record_imu_arrivals(client, arrivals)
             for _ in range(rounds):
                 for title in TITLES:
                     flowing_since = time.time()
-                    await until(lambda t=flowing_since: _flowed(arrivals, t, settle_s), 120)
+                    await until(lambda t=flowing_since: imu_flowed(arrivals, t, settle_s), 120)
                     pid, killed = stack.pids[title], time.time()
                     os.kill(pid, signal.SIGKILL)
                     await until(lambda t=title, p=pid: stack.pids[t] != p, 60)
@@ -75,12 +69,6 @@ async def measure(rounds: int, settle_s: float) -> dict[str, list[tuple[float, f
         stack.stop()
         pump.cancel()
     return figures
-
-
-def _flowed(arrivals: list[tuple[float, float]], since: float, settle_s: float) -> bool:
-    """IMU samples have kept arriving since `since` for `settle_s` (a restart has settled)."""
-    now = time.time()
-    return now - since >= settle_s and bool(arrivals) and now - arrivals[-1][0] < 0.5
 
 
 def main(argv: list[str] | None = None) -> int:

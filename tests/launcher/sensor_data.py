@@ -128,3 +128,25 @@ async def map_marking_an_echo(url: str, timeout_s: float = 60.0) -> dict[str, An
         finally:
             sender.cancel()
     raise AssertionError(f"no obstacle map marked the radar echo at {where.round(1)} m")
+
+
+async def record_imu_arrivals(
+    client: RosbridgeClient, arrivals: list[tuple[float, float]]
+) -> asyncio.Task[None]:
+    """Subscribe to the IMU; the returned task appends (received, header stamp) of each sample,
+    wall-clock seconds, to `arrivals` until cancelled (how a kill's recovery is timed)."""
+    sub = await client.subscribe("/imu/data", "sensor_msgs/msg/Imu")
+
+    async def collect() -> None:
+        async for received in sub:
+            stamp = received.msg["header"]["stamp"]
+            arrivals.append((time.time(), stamp["sec"] + stamp["nanosec"] / 1e9))
+
+    return asyncio.create_task(collect())
+
+
+def imu_flowed(arrivals: list[tuple[float, float]], since: float, settle_s: float) -> bool:
+    """IMU samples have kept arriving since `since` for `settle_s` (a restart has settled),
+    the latest < 0.5 s ago."""
+    now = time.time()
+    return now - since >= settle_s and bool(arrivals) and now - arrivals[-1][0] < 0.5

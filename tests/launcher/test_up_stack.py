@@ -30,7 +30,9 @@ from .sensor_data import (
     MAP_TYPE,
     TRUTH_TOPIC,
     TRUTH_TYPE,
+    imu_flowed,
     marked,
+    record_imu_arrivals,
     water_obstacles_xy_m,
 )
 
@@ -177,17 +179,10 @@ async def imu_recovery_after_kills(up: UpProcess, titles: tuple[str, ...]) -> di
     arrivals: list[tuple[float, float]] = []  # (received, header stamp), wall-clock seconds
     recovery: dict[str, Recovery] = {}
     async with RosbridgeClient(up.wait_ready(), encoding="cbor", backoff_max=0.25) as client:
-        sub = await client.subscribe("/imu/data", "sensor_msgs/msg/Imu")
-
-        async def collect() -> None:
-            async for received in sub:
-                stamp = received.msg["header"]["stamp"]
-                arrivals.append((time.time(), stamp["sec"] + stamp["nanosec"] / 1e9))
-
-        collector = asyncio.create_task(collect())
+        collector = await record_imu_arrivals(client, arrivals)
         for title in titles:
             since = time.time()  # one kill at a time: the IMU has flowed for SETTLE_S
-            await until(lambda t=since: imu_flowed(arrivals, t), RECOVERY_TIMEOUT_S)
+            await until(lambda t=since: imu_flowed(arrivals, t, SETTLE_S), RECOVERY_TIMEOUT_S)
             pid = up.child_pids()[title]
             killed_s = time.time()
             os.kill(pid, signal.SIGKILL)
@@ -200,12 +195,6 @@ async def imu_recovery_after_kills(up: UpProcess, titles: tuple[str, ...]) -> di
             recovery[title] = Recovery(respawned_s, first - killed_s)
         collector.cancel()
     return recovery
-
-
-def imu_flowed(arrivals: list[tuple[float, float]], since: float) -> bool:
-    """IMU samples arrived through the last SETTLE_S since `since`, the latest < 0.5 s ago."""
-    now = time.time()
-    return now - since >= SETTLE_S and bool(arrivals) and now - arrivals[-1][0] < 0.5
 
 
 async def until(condition, timeout_s: float) -> None:
