@@ -39,7 +39,7 @@ from schemas import codec_cbor
 from schemas.pointcloud import pack_points
 from schemas.runtime.process import MALLOC_ENV as TUNED_MALLOC
 from tests.child_process import Running, repo_env
-from tests.dds.dds_netns import Host, LinkShape, shape_link, two_hosts, why_not
+from tests.dds.dds_netns import Host, LinkShape, bridge_argv, shape_link, two_hosts, why_not
 
 SCAN_POINTS = 345_600  # Table 4.3: 1440 x 240 rays at 0.25 degrees
 POINT_STEP = 16  # x, y, z, intensity float32
@@ -149,30 +149,13 @@ def role_argv(role: str, url: str, seconds: float, host: Host | None) -> list[st
     return host.command(argv) if host is not None else argv
 
 
-def bridge_argv(host: Host | None, peer: Host | None, domain: int | None) -> list[str]:
-    argv = [
-        sys.executable,
-        "-m",
-        "bridge",
-        "--host",
-        "127.0.0.1",
-        "--port",
-        "0",
-        "--log-level",
-        "warning",
-    ]
-    if domain is not None:
-        argv += ["--dds", "--domain", str(domain), *EXTRA_BRIDGE_ARGS]
-    if host is not None and peer is not None:
-        argv += ["--dds-interface", host.interface, "--dds-peer", peer.address]
-    return host.command(argv) if host is not None else argv
-
-
 @contextlib.contextmanager
 def bridge(
     host: Host | None = None, peer: Host | None = None, domain: int | None = None
 ) -> Iterator[str]:
-    child = Running(bridge_argv(host, peer, domain), env=repo_env(TUNED_MALLOC))
+    dds_options = EXTRA_BRIDGE_ARGS if domain is not None else []
+    argv = bridge_argv(host, peer, domain, "--log-level", "warning", *dds_options)
+    child = Running(argv, env=repo_env(TUNED_MALLOC))
     try:
         port = child.wait_for_line(LISTENING).group("port")
         yield f"ws://127.0.0.1:{port}"

@@ -14,6 +14,7 @@ import contextlib
 import os
 import shutil
 import subprocess
+import sys
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 
@@ -90,6 +91,19 @@ class LinkShape:
             f"{self.rate_mbit:g} Mbit/s, {self.delay_ms:g} ms ± {self.jitter_ms:g} ms, "
             f"{self.loss_percent:g} % loss"
         )
+
+
+def bridge_argv(
+    host: Host | None, peer: Host | None, domain: int | None, *options: str
+) -> list[str]:
+    """`python -m bridge` on 127.0.0.1, port 0, with `options`: in `host`'s namespace when
+    given, a participant of DDS `domain` when given, reaching `peer` over `host`'s link."""
+    argv = [sys.executable, "-m", "bridge", "--host", "127.0.0.1", "--port", "0", *options]
+    if domain is not None:
+        argv += ["--dds", "--domain", str(domain)]
+    if host is not None and peer is not None:
+        argv += ["--dds-interface", host.interface, "--dds-peer", peer.address]
+    return host.command(argv) if host is not None else argv
 
 
 def shape_link(host: Host, shape: LinkShape) -> str:

@@ -18,34 +18,13 @@ import pytest
 
 from tests.child_process import running
 from tests.compat.node_runner import JS_DIR, node_executable
-from tests.dds.dds_netns import Host, two_hosts, why_not
+from tests.dds.dds_netns import Host, bridge_argv, two_hosts, why_not
 
 pytestmark = pytest.mark.slow
 
 ROSLIBPY_HOST = Path(__file__).resolve().parent / "roslibpy_host.py"
 LISTENING = r"listening on ws://127\.0\.0\.1:(?P<port>\d+)"
 RESULT_TIMEOUT_S = 120.0
-
-
-def bridge_argv(host: Host, peer: Host, domain: int) -> list[str]:
-    return host.command(
-        [
-            sys.executable,
-            "-m",
-            "bridge",
-            "--host",
-            "127.0.0.1",
-            "--port",
-            "0",
-            "--dds",
-            "--domain",
-            str(domain),
-            "--dds-interface",
-            host.interface,
-            "--dds-peer",
-            peer.address,
-        ]
-    )
 
 
 def roslibpy_argv(host: Host, port: str, *scenario: str) -> list[str]:
