@@ -5,6 +5,7 @@ from __future__ import annotations
 import asyncio
 import logging
 import time
+from abc import ABC, abstractmethod
 from collections.abc import Awaitable, Callable
 from typing import Any, Generic, Literal, TypeVar
 
@@ -31,7 +32,7 @@ def normalize_service_values(
     return normalize(spec, values, now_ns=time.time_ns())
 
 
-class HandlerHost(Generic[HandlerT]):
+class HandlerHost(ABC, Generic[HandlerT]):
     """What serving services and serving actions share: a handler and its type per name, the
     registry requests are normalised with, the send answers leave through, and the tasks
     still running (cancelled when the client closes)."""
@@ -49,8 +50,9 @@ class HandlerHost(Generic[HandlerT]):
         """Stop serving ``name``; calls and goals already running still answer."""
         self._handlers.pop(name, None)
 
+    @abstractmethod
     def _running_tasks(self) -> list[asyncio.Task[None]]:
-        raise NotImplementedError
+        """The handler tasks still running, to cancel when the client closes."""
 
     async def cancel_all(self) -> None:
         """Cancel running handlers (client closing)."""
