@@ -23,7 +23,8 @@ Design (asyncio subprocesses, one event loop, no threads of our own; one child's
   timeout), every child gets SIGINT, then SIGTERM and SIGKILL after ``stop_timeout_s`` each.
   A child that serves must exit 0 on that SIGINT, else the shutdown is unclean (exit 1); one
   still starting (at start-up, or restarted and not yet serving again) has no handler yet and
-  dies of it, which is the stop asked for: a user's stop during a restart exits 0.
+  dies of it (by the signal, or exit 1 when it lands inside a C extension's import), which is
+  the stop asked for: a user's stop during a restart exits 0.
 """
 
 from __future__ import annotations
@@ -427,13 +428,17 @@ class Supervisor:
         bridge = [child for child in self.children if child.component.name == self._bridge.name]
         codes: dict[str, int] = {}
         for group in (clients, bridge):
+            starting = {id(c) for c in group if not c.ready and c.process.returncode is None}
             results = await asyncio.gather(*(child.stop(timeout_s) for child in group))
             for child, code in zip(group, results, strict=True):
                 title = child.component.title
-                if not child.ready and -code in (signal.SIGINT, signal.SIGTERM):
-                    # Stopped before it handled signals (still importing, just restarted):
-                    # it ended on our request, which is what a user's stop asks for.
-                    log.info("%s stopped while starting (%s)", title, signal.Signals(-code).name)
+                if id(child) in starting and code != 0:
+                    # Stopped before it handled signals (still importing, just restarted): it
+                    # ended on our request, which is what a user's stop asks for. SIGINT in the
+                    # middle of a C extension's import (numpy's) surfaces as an ImportError and
+                    # exit 1 rather than a death by the signal, so any exit counts here.
+                    how = signal.Signals(-code).name if code < 0 else f"exit code {code}"
+                    log.info("%s stopped while starting (%s)", title, how)
                     code = 0
                 else:
                     log.info("%s", describe_exit(title, code))

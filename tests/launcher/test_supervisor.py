@@ -13,6 +13,7 @@ import contextlib
 import io
 import logging
 import os
+import re
 import signal
 import socket
 import urllib.request
@@ -195,7 +196,10 @@ async def test_a_stop_during_a_restart_exits_0_leaving_no_process(
     assert await harness.finish() == 0, output.getvalue()
     assert wait_gone(harness.pids()) == []
     if when == "just restarted":
-        assert "navigation stopped while starting (SIGINT)" in output.getvalue()
+        # SIGINT, or exit 1 when it lands inside numpy's C import (an ImportError)
+        assert re.search(
+            r"navigation stopped while starting \((SIGINT|exit code 1)\)", output.getvalue()
+        )
 
 
 async def test_a_serving_component_that_dies_of_the_stop_signal_is_an_unclean_stop(
