@@ -21,7 +21,7 @@ from websockets.asyncio.server import Server, ServerConnection, serve
 from websockets.exceptions import ConnectionClosed
 from websockets.http11 import Request, Response
 
-from bridge.access import HandshakePolicy, tls_context
+from bridge.access import HandshakePolicy, handshake_token, tls_context
 from bridge.config import BridgeConfig
 from bridge.core import BridgeCore
 from bridge.effects import Close, DeadlineKey, Effect, Schedule, Send
@@ -151,6 +151,8 @@ class BridgeServer:
 
         intake = Intake(client_id, self.core, self._pool, apply)
         self._tell_clients_changed()
+        token = handshake_token(ws.request) if ws.request is not None else None
+        self.apply(self.core.admit(client_id, time.time_ns(), token))
         try:
             busy_s = 0.0  # time spent handling this client's frames since it last yielded
             async for data in ws:
