@@ -104,7 +104,7 @@ class BridgeCore:
             ctx.schedule(("auth_grace", client_id), now_ns + grace_ns)
         return ctx.effects
 
-    def authorize(self, client_id: int, action: Action, name: str) -> str | None:
+    def authorize(self, client_id: int, action: Action | str, name: str) -> str | None:
         """May client `client_id` do `action` on `name`? The refusal text, or None. For other
         protocols (Foxglove) and mirrors acting on a client's behalf: the same roles as ops."""
         session = self.state.sessions.get(client_id)
@@ -112,7 +112,7 @@ class BridgeCore:
             return f"client {client_id} is not connected"
         if not session.authenticated:
             return "not authenticated"
-        return self.state.policy.authorize(session, action, absolute_name(name))
+        return self.state.policy.authorize(session, Action(action), absolute_name(name))
 
     def disconnect(self, client_id: int, now_ns: int) -> list[Effect]:
         """Release everything the client owned and answer whatever waited on it."""

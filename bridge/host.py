@@ -202,7 +202,7 @@ class PluginHost:
         "publish", "call_service", ...) on `name`? The refusal text (naming action, name and
         role) or None. Another protocol asks before it acts for its client, as the core does
         before every rosbridge op; a mirror acting for a client asks with that client's id."""
-        return self._core.authorize(client_id, Action(action), name)
+        return self._core.authorize(client_id, action, name)
 
     def connect_client(self, receive: Receiver, peer: str = "", token: str | None = None) -> int:
         """A client of another protocol (Foxglove) that the core treats like a websocket
