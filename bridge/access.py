@@ -20,6 +20,7 @@ from fnmatch import fnmatchcase
 from websockets.http11 import Request
 
 from bridge.config import BridgeConfig
+from bridge.roles import bearer_token
 
 
 def tls_context(config: BridgeConfig) -> ssl.SSLContext | None:
@@ -45,10 +46,9 @@ def same_origin(origin: str, host_header: str | None) -> bool:
 
 def handshake_token(request: Request) -> str | None:
     """The token of `Authorization: Bearer <token>`, else of the URL's `?token=`, else None."""
-    header = request.headers.get("Authorization", "")
-    scheme_name, _, value = header.partition(" ")
-    if scheme_name.lower() == "bearer" and value.strip():
-        return value.strip()
+    token = bearer_token(request.headers.get("Authorization"))
+    if token is not None:
+        return token
     query = urllib.parse.parse_qs(urllib.parse.urlsplit(request.path).query)
     found = query.get("token")
     return found[0] if found else None

@@ -25,6 +25,7 @@ from bridge.rosapi.common import RosapiService
 from bridge.session import ClientSession
 from bridge.sinks import MessageSink
 from bridge.validation import PublishCheck
+from schemas import tokens
 from schemas.errors import SchemaError
 from schemas.message import normalize, payload_bytes
 from schemas.ops import MAX_NAME_CHARS, OpError, reply_id
@@ -301,6 +302,21 @@ class BridgeCore:
     def remove_sink(self, sink: MessageSink) -> None:
         with contextlib.suppress(ValueError):
             self.state.sinks.remove(sink)
+
+    def may_read_metrics(self, token: str | None, now_ns: int) -> bool:
+        """/metrics for everyone, unless the roles file says `metrics_role_only`: then only
+        for a valid token whose role has `metrics = true`."""
+        roles, secret = self.state.config.roles, self.state.config.auth_secret
+        if roles is None or not roles.metrics_role_only:
+            return True
+        if token is None or secret is None:
+            return False
+        try:
+            claims = tokens.verify(secret.get_secret_value(), token, now_ns / 1e9)
+        except tokens.TokenError:
+            return False
+        role = roles.roles.get(claims.role)
+        return role is not None and role.metrics
 
     def set_audit(self, sink: AuditSink | None) -> None:
         """Where the policy writes audit entries (`--audit-log`); None: nowhere."""

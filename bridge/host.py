@@ -22,7 +22,7 @@ from bridge.effects import Effect, Send
 from bridge.graph import ActionEntry, ServiceEntry, TopicEntry
 from bridge.http import HttpRoutes
 from bridge.link import Delivered
-from bridge.roles import AuditSink, PrincipalCounters
+from bridge.roles import AuditSink, PrincipalCounters, bearer_token
 from bridge.rosapi.common import RosapiHandler, RosapiService
 from bridge.session import ClientSession
 from bridge.sinks import MessageSink
@@ -220,6 +220,10 @@ class PluginHost:
     def principal_counters(self) -> Mapping[str, PrincipalCounters]:
         """Messages, bytes, refusals and drops per principal (for /metrics)."""
         return self._core.state.policy.counters
+
+    def may_read_metrics(self, authorization: str | None) -> bool:
+        """Whether an HTTP request with this `Authorization` header may read /metrics."""
+        return self._core.may_read_metrics(bearer_token(authorization), time.time_ns())
 
     def _apply(self, effects: list[Effect]) -> None:
         if effects:

@@ -277,6 +277,12 @@ class Policy:
         self.audit(entry)
 
 
+def bearer_token(authorization: str | None) -> str | None:
+    """The token of an `Authorization: Bearer <token>` header value, else None."""
+    scheme_name, _, value = (authorization or "").partition(" ")
+    return value.strip() or None if scheme_name.lower() == "bearer" else None
+
+
 def new_grant(role_name: str, role: Role, now_ns: int) -> Grant:
     limits = role.limits
     return Grant(
