@@ -54,8 +54,10 @@ OP_ACTIONS: dict[str, tuple[Action, str]] = {
     "cancel_action_goal": (Action.SEND_GOAL, "action"),
     "advertise_action": (Action.ADVERTISE_ACTION, "action"),
 }
-# Ops written to the audit trail whenever they are allowed (publishes only on audited topics).
+# Ops written to the audit trail whenever they are allowed (publishes only on audited topics);
+# not rosapi's reads of the graph (Foxglove polls them every 3 s), but parameter changes.
 AUDITED_OPS = {"call_service", "send_action_goal", "cancel_action_goal"}
+ROSAPI_PREFIX = "/rosapi/"
 
 
 @dataclass(frozen=True)
@@ -205,7 +207,9 @@ class Policy:
             counters.bytes += wire
             if self.audited(asked.name):
                 self.record(session, op_name, asked.name, now_ns, "allowed")
-        elif op_name in AUDITED_OPS or asked.action is Action.SET_PARAM:
+        elif asked.action is Action.SET_PARAM or (
+            op_name in AUDITED_OPS and not asked.name.startswith(ROSAPI_PREFIX)
+        ):
             self.record(session, op_name, asked.name, now_ns, "allowed")
         return None
 
