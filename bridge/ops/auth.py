@@ -62,7 +62,7 @@ def handle_auth(ctx: Context, session: ClientSession, op: Auth) -> None:
             session,
             "auth",
             op.id,
-            f"authenticated with rosauth (client {op.client!r}, level {op.level!r})",
+            f"authenticated (client {op.client!r}, level {op.level!r}) with rosauth's MAC",
             StatusLevel.INFO,
         )
 
