@@ -13,7 +13,7 @@ from collections.abc import Callable, Iterable
 
 from bridge.config import BridgeConfig
 from bridge.context import BridgeState, Context, log_problem_summary
-from bridge.effects import DeadlineKey, Effect
+from bridge.effects import DeadlineKey, Effect, Hold
 from bridge.errors import BridgeError, InvalidNameError
 from bridge.inbound import InboundFrame, RefusedFrame, decode_frame, read_frame
 from bridge.names import absolute_name
@@ -275,6 +275,8 @@ class BridgeCore:
             refusal = policy.check(session, route.op, message, wire_bytes, ctx.now_ns)
             if refusal is not None:
                 answer_failed_request(ctx, session, message, refusal.text)
+                if refusal.quota:  # read nothing more of it until its quota has room
+                    ctx.effects.append(Hold(session.client_id, refusal.retry_ns))
                 return
         try:
             route.run(ctx, session, message)

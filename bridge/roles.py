@@ -62,10 +62,12 @@ ROSAPI_PREFIX = "/rosapi/"
 
 @dataclass(frozen=True)
 class Refusal:
-    """Why an op may not take effect; `quota` refusals are counted, not audited one by one."""
+    """Why an op may not take effect; `quota` refusals are counted, not audited one by one,
+    and `retry_ns` says when the client's quota has room again (read nothing before)."""
 
     text: str
     quota: bool = False
+    retry_ns: int = 0
 
 
 @dataclass
@@ -84,6 +86,11 @@ class TokenBucket:
             return False  # a message larger than the burst passes only from a full bucket
         self.level -= amount
         return True
+
+    def ready_ns(self, amount: float, now_ns: int) -> int:
+        """When the bucket will hold `amount` (or be full, for more than a burst)."""
+        missing = min(amount, self.rate) - self.level
+        return now_ns + max(0, int(missing / self.rate * NS_PER_S))
 
 
 @dataclass
@@ -233,6 +240,7 @@ class Policy:
                 f"publish {asked.name} dropped: {session.principal} is over the quota of role "
                 f"{grant.role_name}",
                 quota=True,
+                retry_ns=quota_ready_ns(grant, wire, now_ns),
             )
         return None
 
@@ -306,6 +314,16 @@ def within_quota(grant: Grant, wire_bytes: int, now_ns: int) -> bool:
     if grant.messages is not None and not grant.messages.take(1, now_ns):
         return False
     return grant.bytes is None or grant.bytes.take(wire_bytes, now_ns)
+
+
+def quota_ready_ns(grant: Grant, wire_bytes: int, now_ns: int) -> int:
+    """When both buckets hold another message like this one."""
+    ready = now_ns
+    if grant.messages is not None:
+        ready = max(ready, grant.messages.ready_ns(1, now_ns))
+    if grant.bytes is not None:
+        ready = max(ready, grant.bytes.ready_ns(wire_bytes, now_ns))
+    return ready
 
 
 def advertise_limit(session: ClientSession, op_name: str, name: str, role: Role) -> str | None:

@@ -145,6 +145,9 @@ def test_a_publisher_past_its_quota_loses_messages_counted(bridge):
     assert len(bridge.outbox(sub)) == 10
     counters = bridge.core.state.policy.counters["teleop"]
     assert (counters.messages, counters.dropped, counters.refusals) == (10, 15, 0)
+    # Each drop asks the edge to read nothing more of it until one message fits (1/10 s).
+    assert {hold.until_ns - START_NS for hold in bridge.holds} == {100_000_000}
+    assert {hold.client_id for hold in bridge.holds} == {operator}
     bridge.advance(0.5)  # half a second refills half the bucket
     for _ in range(10):
         bridge.send(operator, {"op": "publish", "topic": "/cmd_wrench", "msg": WRENCH})
