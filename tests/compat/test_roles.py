@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import asyncio
 import json
+import re
 import time
 import urllib.request
 from collections.abc import Callable, Iterator
@@ -28,6 +29,15 @@ ROLES_FILE = Path(__file__).resolve().parents[2] / "config" / "roles.example.tom
 GRACE_S = 2.0
 WAIT_S = 20.0
 WRENCH_TYPE = "geometry_msgs/Wrench"
+IMU_TYPE, TWIST = "sensor_msgs/Imu", "geometry_msgs/Twist"
+
+
+def imu(n: int) -> dict:
+    return {"header": {"stamp": {"sec": 1, "nanosec": n}, "frame_id": "imu"}}
+
+
+def bearer(role: str, subject: str) -> dict[str, str]:
+    return {"Authorization": f"Bearer {token(role, subject)}"}
 
 
 def wrench(force_x: float) -> dict:
@@ -246,3 +256,67 @@ def test_riverbridge_token_prints_a_token_the_bridge_accepts(tmp_path, capsys):
     with pytest.raises(SystemExit) as exit_info:
         main([*argv[:-1], "-5"])
     assert exit_info.value.code == 2 and "--ttl" in capsys.readouterr().err
+
+
+def metric(url: str, counter: str, principal: str) -> int:
+    http_url = url.replace("ws://", "http://")
+    with urllib.request.urlopen(f"{http_url}/metrics", timeout=WAIT_S) as page:
+        text = page.read().decode()
+    pattern = rf'riverbridge_principal_{counter}_total{{principal="{principal}"}} (\S+)'
+    found = re.search(pattern, text)
+    return int(float(found.group(1))) if found else 0
+
+
+def test_a_flood_at_its_quota_starves_nobody(roles_bridge):
+    """The operator role's quota is 200 messages/s (config/roles.example.toml). While one
+    operator floods, another principal's IMU loses nothing, the flooder gets at most its quota
+    through, and the bridge handles at most about as many of its frames again (it holds a
+    flooder's reads until its quota has room) however many it sends. The latency figure
+    (p99 with/without the flood) is benchmarks/roles_flood.py's: too noisy for a test here."""
+    url = roles_bridge.endpoint.url
+    imu_count, imu_period_s, quota_per_s = 200, 0.01, 200
+
+    async def scenario() -> tuple[int, int, float, list[int], int]:
+        flooder = await websockets.connect(url, additional_headers=bearer("operator", "flood"))
+        sensor = await websockets.connect(url, additional_headers=bearer("component", "imu"))
+        viewer = await websockets.connect(url, additional_headers=bearer("observer", "viewer"))
+        await viewer.send(json.dumps({"op": "subscribe", "topic": "/imu", "type": IMU_TYPE}))
+        await sensor.send(json.dumps({"op": "advertise", "topic": "/imu", "type": IMU_TYPE}))
+        await flooder.send(json.dumps({"op": "advertise", "topic": "/cmd_vel", "type": TWIST}))
+        for ws in (viewer, sensor, flooder):  # all three are set up
+            await ws.send(json.dumps({"op": "call_service", "service": "/rosapi/get_time"}))
+            await asyncio.wait_for(ws.recv(), WAIT_S)
+        frame = json.dumps({"op": "publish", "topic": "/cmd_vel", "msg": {}})
+        sent, started = 0, time.monotonic()
+
+        async def flood() -> None:
+            nonlocal sent
+            while True:
+                for _ in range(50):
+                    await flooder.send(frame)
+                sent += 50
+                await asyncio.sleep(0)
+
+        flooding = asyncio.create_task(flood())
+        seen: list[int] = []
+        for n in range(imu_count):
+            await sensor.send(json.dumps({"op": "publish", "topic": "/imu", "msg": imu(n)}))
+            await asyncio.sleep(imu_period_s)
+        while len(seen) < imu_count:
+            message = json.loads(await asyncio.wait_for(viewer.recv(), WAIT_S))
+            seen.append(message["msg"]["header"]["stamp"]["nanosec"])
+        flooding.cancel()
+        accepted = metric(url, "messages", "flood")
+        handled = accepted + metric(url, "dropped", "flood")
+        elapsed_s = time.monotonic() - started
+        flooder.transport.abort()  # its unread backlog would hold a closing handshake
+        await sensor.close()
+        await viewer.close()
+        return sent, handled, elapsed_s, seen, accepted
+
+    sent, handled, elapsed_s, seen, accepted = asyncio.run(scenario())
+    assert seen == list(range(imu_count))  # every IMU message, in order
+    most = quota_per_s * (elapsed_s + 1)  # its rate, plus one second's burst
+    assert accepted <= most, (accepted, elapsed_s)
+    assert handled <= 2 * most, (handled, sent, elapsed_s)
+    assert sent > handled  # it sent more than the bridge read: the rest waited on TCP
