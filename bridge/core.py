@@ -322,7 +322,7 @@ class BridgeCore:
 
     def set_audit(self, sink: AuditSink | None) -> None:
         """Where the policy writes audit entries (`--audit-log`); None: nowhere."""
-        self.state.policy.audit = sink
+        self.state.policy.set_audit(sink)
 
     def answer_service(self, name: str, service: RosapiService) -> None:
         """Answer calls to `name` in the bridge itself, as rosapi's (the stats service)."""

@@ -162,11 +162,15 @@ class Policy:
     roles: RolesConfig | None
     audit: AuditSink | None = None
     counters: dict[str, PrincipalCounters] = field(default_factory=dict)
+    # Whether the core must ask at all: a plain attribute, read once per op on the hot path.
+    active: bool = field(init=False, default=False)
 
-    @property
-    def active(self) -> bool:
-        """Whether the core must ask at all (read once per op on the hot path)."""
-        return self.roles is not None or self.audit is not None
+    def __post_init__(self) -> None:
+        self.active = self.roles is not None or self.audit is not None
+
+    def set_audit(self, sink: AuditSink | None) -> None:
+        self.audit = sink
+        self.active = self.roles is not None or sink is not None
 
     def role(self, name: str) -> Role | None:
         return self.roles.roles.get(name) if self.roles is not None else None
