@@ -33,6 +33,7 @@ ANONYMOUS = "anonymous"  # the principal of a client that has not authenticated
 TRUSTED = "bridge"  # the principal of in-process clients (mirrors, telemetry): never limited
 
 AuditSink = Callable[[dict[str, object]], None]
+MAX_DECISIONS = 10_000  # remembered allow-list answers before the memo starts over
 
 # /rosapi services that read or write parameters: checked as parameters, by parameter name.
 PARAM_SERVICES = {
@@ -164,6 +165,7 @@ class Policy:
     counters: dict[str, PrincipalCounters] = field(default_factory=dict)
     # Whether the core must ask at all: a plain attribute, read once per op on the hot path.
     active: bool = field(init=False, default=False)
+    _decisions: dict[tuple[str, Action, str], bool] = field(init=False, default_factory=dict)
 
     def __post_init__(self) -> None:
         self.active = self.roles is not None or self.audit is not None
@@ -231,7 +233,7 @@ class Policy:
         if grant is None:
             return None
         role = grant.role
-        if not allows(role, asked.action, asked.name):
+        if not self.allows(grant.role_name, role, asked.action, asked.name):
             return Refusal(
                 f"{op_name} {asked.name} refused: role {grant.role_name} may not "
                 f"{asked.action.value.replace('_', ' ')} {asked.name}"
@@ -247,6 +249,16 @@ class Policy:
                 retry_ns=quota_ready_ns(grant, wire, now_ns),
             )
         return None
+
+    def allows(self, role_name: str, role: Role, action: Action, name: str) -> bool:
+        """`allows`, remembered per (role, action, name): globs are matched once per name."""
+        key = (role_name, action, name)
+        found = self._decisions.get(key)
+        if found is None:
+            if len(self._decisions) >= MAX_DECISIONS:  # names are the clients': stay bounded
+                self._decisions.clear()
+            found = self._decisions[key] = allows(role, action, name)
+        return found
 
     def authorize(self, session: ClientSession | None, action: Action, name: str) -> str | None:
         """Another protocol's or a mirror's question: may this client do `action` on `name`?
