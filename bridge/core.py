@@ -93,12 +93,13 @@ class BridgeCore:
 
     def admit(self, client_id: int, now_ns: int, token: str | None = None) -> list[Effect]:
         """A websocket client's handshake is done: check the token it presented there
-        (`Authorization: Bearer`, `?token=`), else give it `--auth-grace` to authenticate."""
+        (`Authorization: Bearer`, `?token=`), else give it `--auth-grace` to authenticate.
+        Without a secret a token is ignored, as the `auth` op is."""
         ctx = Context(self.state, now_ns)
         session = self.state.sessions.get(client_id)
         if session is None:
             return []
-        if token is not None:
+        if token is not None and self.state.config.auth_secret is not None:
             auth.authenticate_token(ctx, session, token, None)
         elif not session.authenticated:
             grace_ns = int(self.state.config.auth_grace_s * 1e9)

@@ -217,7 +217,8 @@ class BridgeServer:
                 elif link is None and effect.client_id in self.internal_clients:
                     self.internal_clients[effect.client_id](effect)
             elif isinstance(effect, Hold):
-                self._holds[effect.client_id] = effect.until_ns
+                if effect.client_id in self.links:  # an in-process client has no reads to hold
+                    self._holds[effect.client_id] = effect.until_ns
             elif isinstance(effect, Schedule):
                 self._schedule(effect.key, effect.at_ns)
             elif isinstance(effect, Close):

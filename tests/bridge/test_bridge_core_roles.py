@@ -328,3 +328,10 @@ def test_refusals_are_logged_once_per_line(bridge, caplog):
     bridge.send(observer, {"op": "advertise", "topic": "/cmd_wrench", "type": "std_msgs/String"})
     [line] = [r.getMessage() for r in caplog.records if "refused" in r.getMessage()]
     assert "op=advertise" in line and "role observer" in line and "/cmd_wrench" in line
+
+
+def test_a_token_at_the_handshake_of_a_bridge_without_a_secret_is_ignored(harness):
+    client = harness.connect()
+    harness._record(harness.core.admit(client, harness.now_ns, token("operator")))
+    assert harness.closes == [] and harness.deadlines == {}
+    assert harness.call(client, "/rosapi/get_time")["result"] is True
