@@ -320,3 +320,22 @@ def test_a_flood_at_its_quota_starves_nobody(roles_bridge):
     assert accepted <= most, (accepted, elapsed_s)
     assert handled <= 2 * most, (handled, sent, elapsed_s)
     assert sent > handled  # it sent more than the bridge read: the rest waited on TCP
+
+
+def test_riverbridges_own_clients_present_a_token(roles_bridge, monkeypatch):
+    from clients.connection import TransportConfig, open_once
+
+    monkeypatch.setenv("RIVERBRIDGE_TOKEN", token("observer", "own-client"))
+
+    async def call() -> tuple[dict, dict]:
+        ws = await open_once(roles_bridge.endpoint.url, TransportConfig(), WAIT_S)
+        async with ws:
+            await ws.send(json.dumps({"op": "call_service", "service": "/rosapi/get_time"}))
+            time_reply = json.loads(await asyncio.wait_for(ws.recv(), WAIT_S))
+            await ws.send(json.dumps({"op": "call_service", "service": "/reset_scenario"}))
+            refused = json.loads(await asyncio.wait_for(ws.recv(), WAIT_S))
+        return time_reply, refused
+
+    time_reply, refused = asyncio.run(call())
+    assert time_reply["result"] is True
+    assert refused["result"] is False and "role observer may not call service" in refused["values"]
