@@ -16,6 +16,7 @@ from tests.bridge.bridge_harness import START_NS, CoreHarness
 SECRET = "0123456789abcdef0123456789abcdef"
 NOW_S = START_NS // 1_000_000_000
 WRENCH = {"force": {"x": 1.0, "y": 0.0, "z": 0.0}, "torque": {"x": 0.0, "y": 0.0, "z": 0.5}}
+FIB = "example_interfaces/action/Fibonacci"
 ROLES = RolesConfig.model_validate(
     {
         "rosauth_role": "component",
@@ -40,6 +41,7 @@ ROLES = RolesConfig.model_validate(
                 "publish": ["*"],
                 "call_service": ["*"],
                 "advertise_service": ["*"],
+                "advertise_action": ["*"],
             },
         },
     }
@@ -335,3 +337,26 @@ def test_a_token_at_the_handshake_of_a_bridge_without_a_secret_is_ignored(harnes
     harness._record(harness.core.admit(client, harness.now_ns, token("operator")))
     assert harness.closes == [] and harness.deadlines == {}
     assert harness.call(client, "/rosapi/get_time")["result"] is True
+
+
+def test_goals_are_for_roles_that_may_send_them(bridge):
+    provider = join(bridge, "component", "sim")
+    bridge.send(provider, {"op": "advertise_action", "action": "/fibonacci", "type": FIB})
+    goal = {"op": "send_action_goal", "action": "/fibonacci", "action_type": FIB, "args": {}}
+    observer = join(bridge, "observer", "dash")
+    bridge.send(observer, {**goal, "id": "g1"})
+    [failed] = bridge.outbox(observer)
+    assert failed["op"] == "action_result" and failed["result"] is False
+    assert "role observer may not send goal /fibonacci" in str(failed["values"])
+    bridge.send(observer, {"op": "advertise_action", "action": "/fibonacci", "type": FIB})
+    assert bridge.outbox(provider) == []  # neither the goal nor a takeover reached anyone
+    operator = join(bridge, "operator", "teleop")
+    bridge.send(operator, {**goal, "id": "g2"})
+    [forwarded] = bridge.outbox(provider)
+    assert forwarded["op"] == "send_action_goal"
+    audited = [(e["principal"], e["op"], e["outcome"]) for e in bridge.audit if e["op"] != "auth"]
+    assert audited == [
+        ("dash", "send_action_goal", "refused"),
+        ("dash", "advertise_action", "refused"),
+        ("teleop", "send_action_goal", "allowed"),
+    ]
