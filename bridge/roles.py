@@ -80,12 +80,16 @@ class TokenBucket:
     last_ns: int
 
     def take(self, amount: float, now_ns: int) -> bool:
-        elapsed_s = max(0, now_ns - self.last_ns) / NS_PER_S
-        self.level = min(self.rate, self.level + elapsed_s * self.rate)
-        self.last_ns = now_ns
-        if amount > self.level and self.level < self.rate:
+        level, rate = self.level, self.rate
+        if now_ns > self.last_ns:  # (plain comparisons: this runs per publish)
+            level += (now_ns - self.last_ns) * rate / NS_PER_S
+            if level > rate:
+                level = rate
+            self.last_ns = now_ns
+        if amount > level and level < rate:
+            self.level = level
             return False  # a message larger than the burst passes only from a full bucket
-        self.level -= amount
+        self.level = level - amount
         return True
 
     def ready_ns(self, amount: float, now_ns: int) -> int:
@@ -346,6 +350,8 @@ def advertise_limit(session: ClientSession, op_name: str, name: str, role: Role)
     """The role's limit an advertisement would pass, if any."""
     limits = role.limits
     if op_name in ("advertise", "publish"):
+        if name in session.published:  # the common case: a topic it already publishes
+            return None
         most, owned = limits.topics_advertised, session.published
         what = "topics"
     elif op_name in ("advertise_service", "advertise_action"):
