@@ -56,6 +56,19 @@ def config_from_args(args: argparse.Namespace) -> BridgeConfig:
     return BridgeConfig(**config_values(args, BridgeConfig))
 
 
+def check_audit_log(config: BridgeConfig) -> None:
+    """`--audit-log` must be a file the bridge can append to (ValueError naming it)."""
+    if config.audit_log is None:
+        return
+    try:
+        with config.audit_log.open("a", encoding="utf-8"):
+            pass
+    except OSError as exc:
+        raise ValueError(
+            f"argument --audit-log: cannot append to {config.audit_log}: {exc}"
+        ) from None
+
+
 def dds_config_xml(config: BridgeConfig) -> str:
     """`--print-dds-config`: the XML (ValueError for a bad interface or peer)."""
     settings = CycloneSettings(config.dds_interface, config.dds_peers, config.dds_multicast)
@@ -91,6 +104,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         config = config_from_args(args)
         tls_context(config)  # a certificate that does not load fails here, not at start-up
+        check_audit_log(config)
     except ValidationError as exc:
         parser.error(invalid_options(exc, BridgeConfig))
     except (ValueError, OSError, ssl.SSLError) as exc:

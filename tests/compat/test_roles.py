@@ -238,6 +238,10 @@ def test_a_bad_roles_file_names_the_field_and_exits_2(tmp_path, capsys):
         main(["--roles", str(ROLES_FILE)])  # no secret, no unauthenticated role
     assert exit_info.value.code == 2
     assert "nobody could authenticate" in capsys.readouterr().err
+    with pytest.raises(SystemExit) as exit_info:
+        main(["--audit-log", str(tmp_path / "missing" / "audit.jsonl")])
+    assert exit_info.value.code == 2
+    assert "argument --audit-log: cannot append to" in capsys.readouterr().err
 
 
 def test_riverbridge_token_prints_a_token_the_bridge_accepts(tmp_path, capsys):
