@@ -15,6 +15,7 @@ from typing import Any
 
 import bridge.dds
 from bridge.access import scheme
+from bridge.audit import AuditTrail
 from bridge.config import BridgeConfig
 from bridge.core import BridgeCore
 from bridge.host import Plugin, PluginHost
@@ -32,6 +33,7 @@ def plugin_table(config: BridgeConfig) -> list[tuple[str, bool, PluginFactory]]:
         ("dashboard", True, Dashboard),
         ("telemetry", True, BridgeTelemetry),
         ("dds", config.dds, bridge.dds.plugin),
+        ("audit", config.audit_log is not None, AuditTrail),
     ]
 
 

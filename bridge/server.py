@@ -21,10 +21,10 @@ from websockets.asyncio.server import Server, ServerConnection, serve
 from websockets.exceptions import ConnectionClosed
 from websockets.http11 import Request, Response
 
-from bridge.access import HandshakePolicy, tls_context
+from bridge.access import HandshakePolicy, handshake_token, tls_context
 from bridge.config import BridgeConfig
 from bridge.core import BridgeCore
-from bridge.effects import Close, DeadlineKey, Effect, Schedule, Send
+from bridge.effects import Close, DeadlineKey, Effect, Hold, Schedule, Send
 from bridge.http import HttpRoutes
 from bridge.intake import Intake
 from bridge.link import WRITE_HIGH_WATER, ClientLink, Delivered
@@ -74,6 +74,7 @@ class BridgeServer:
         self.internal_clients: dict[int, Callable[[Send], None]] = {}
         self.delivered: Delivered = no_observer  # told when a delivery's frames are written
         self.clients_changed: list[Callable[[], None]] = []  # after a client comes or goes
+        self._holds: dict[int, int] = {}  # client id -> read nothing of it before (ns)
 
     @property
     def port(self) -> int:
@@ -151,6 +152,8 @@ class BridgeServer:
 
         intake = Intake(client_id, self.core, self._pool, apply)
         self._tell_clients_changed()
+        token = handshake_token(ws.request) if ws.request is not None else None
+        self.apply(self.core.admit(client_id, time.time_ns(), token))
         try:
             busy_s = 0.0  # time spent handling this client's frames since it last yielded
             async for data in ws:
@@ -163,17 +166,26 @@ class BridgeServer:
                     or intake.in_flight > INTAKE_FRAMES
                     or intake.pending_bytes > INTAKE_BYTES
                     or link.queue.answers_waiting > ANSWER_BACKLOG
+                    or client_id in self._holds
                 ):
                     await self._between_turns(link, intake, paced)
+                    await self._held(client_id)
                     busy_s = 0.0
         except ConnectionClosed as exc:
             logger.info("client %d closed: %s", client_id, exc)
         finally:
             intake.closed = True
             del self.links[client_id]
+            self._holds.pop(client_id, None)
             link.close()
             self.apply(self.core.disconnect(client_id, time.time_ns()))
             self._tell_clients_changed()
+
+    async def _held(self, client_id: int) -> None:
+        """A client past its quota (`Hold`): wait until it has room, reading nothing of it."""
+        until_ns = self._holds.pop(client_id, None)
+        if until_ns is not None:
+            await asyncio.sleep(max(0.0, (until_ns - time.time_ns()) / 1e9))
 
     def _tell_clients_changed(self) -> None:
         for callback in self.clients_changed:
@@ -204,6 +216,9 @@ class BridgeServer:
                     paced.add(link)
                 elif link is None and effect.client_id in self.internal_clients:
                     self.internal_clients[effect.client_id](effect)
+            elif isinstance(effect, Hold):
+                if effect.client_id in self.links:  # an in-process client has no reads to hold
+                    self._holds[effect.client_id] = effect.until_ns
             elif isinstance(effect, Schedule):
                 self._schedule(effect.key, effect.at_ns)
             elif isinstance(effect, Close):
