@@ -75,6 +75,7 @@ class PluginHost:
         self._core = core
         self._edge = edge
         self._tasks: set[asyncio.Task[None]] = set()
+        self._graph_nodes: dict[str, frozenset[str]] = {}  # source -> nodes it speaks for
 
     # -- what a plug-in reads ----------------------------------------------------------------
 
@@ -192,6 +193,20 @@ class PluginHost:
     def set_external_nodes(self, source: str, nodes: Iterable[str]) -> None:
         """The nodes another graph (`source`: "dds", "zenoh"...) has, for rosapi's listings."""
         self._core.set_external_nodes(source, nodes)
+
+    # -- gateways between graphs --------------------------------------------------------------
+
+    def claim_nodes(self, source: str, nodes: Iterable[str]) -> None:
+        """The nodes graph plug-in `source` ("dds", "zenoh") speaks for: their messages and
+        endpoints are its graph's, so it never sends them back there."""
+        self._graph_nodes[source] = frozenset(nodes)
+
+    def gateway_nodes(self, source: str) -> frozenset[str]:
+        """Nodes other graph plug-ins speak for: `source` carries their messages, endpoints
+        and services into its graph as it carries the websocket clients' (a gateway), so
+        each message crosses once and never comes back."""
+        others = [nodes for name, nodes in self._graph_nodes.items() if name != source]
+        return frozenset().union(*others)
 
     def _apply(self, effects: list[Effect]) -> None:
         if effects:
