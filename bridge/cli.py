@@ -100,9 +100,9 @@ def main(argv: list[str] | None = None) -> int:
     try:
         config = config_from_args(args)
         tls_context(config)  # a certificate that does not load fails here, not at start-up
+        check_zenoh_config(config)  # a Zenoh configuration file Zenoh refuses fails here too
     except ValidationError as exc:
         parser.error(invalid_options(exc, BridgeConfig))
-        check_zenoh_config(config)  # a Zenoh configuration file Zenoh refuses fails here too
     except (ValueError, OSError, ssl.SSLError) as exc:
         parser.error(str(exc))
     if args.print_dds_config:

@@ -61,6 +61,10 @@ BRIDGE_OPTIONS = (
     "dds_domain",
     "dds_interface",
     "dds_peers",
+    "zenoh",
+    "zenoh_listen",
+    "zenoh_connect",
+    "zenoh_config",
 )
 PASSED = " (passed to the bridge)"
 

@@ -59,6 +59,8 @@ async def test_participant_sees_tokens_reads_imu_and_steers_the_vessel(
             if steering.done():
                 steering.result()  # the peer failed: its output is in the assertion
             speed = await moving
+            nodes = await watcher.call_service("/rosapi/nodes", {})
+            publishers = await watcher.call_service("/rosapi/publishers", {"topic": "/cmd_wrench"})
             imu_result = await imu
             tokens = await run_peer(zenoh_endpoint, zenoh_domain, "tokens", "riverbridge_", "20")
             steering.cancel()
@@ -68,6 +70,8 @@ async def test_participant_sees_tokens_reads_imu_and_steers_the_vessel(
             stop.set()
             await sim
     assert speed >= 0.5
+    assert "/zenoh_helm" in nodes["nodes"]  # rosapi lists the Zenoh graph (its tokens)
+    assert "/zenoh_helm" in publishers["publishers"]
     messages = imu_result["messages"]
     assert len(messages) == 5
     assert all(m["frame_id"] == "imu" and m["covariance_length"] == 9 for m in messages)
