@@ -193,7 +193,7 @@ class ZenohMirror:
         self.graph_sync.apply(self.host, remote_topics, local)
         remote_nodes = self.graph.nodes()
         self.host.set_external_nodes(SOURCE, remote_nodes)
-        self.host.claim_nodes(SOURCE, remote_nodes | self._injected_nodes)
+        self.host.claim_nodes(SOURCE, (remote_nodes | self._injected_nodes) - local)
         provided = {
             name: entry.type_name
             for name, entry in self.host.graph.services.items()

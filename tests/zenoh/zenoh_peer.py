@@ -16,6 +16,8 @@ usage:
   python3 zenoh_peer.py ENDPOINT DOMAIN call SERVICE TIMEOUT_S
       find SERVICE's server token, call it (std_srvs/srv/SetBool, data: true) on the key it
       announces, print the response.
+  python3 zenoh_peer.py ENDPOINT DOMAIN take TOPIC COUNT TIMEOUT_S
+      take COUNT std_msgs/msg/String samples from TOPIC; print their data in order.
   python3 zenoh_peer.py ENDPOINT DOMAIN bad TOPIC
       publish std_msgs/msg/String on TOPIC three ways wrong (attachment of 20 bytes, a key
       naming a type nobody knows, a payload cut short) and then once right ("good").
@@ -136,13 +138,14 @@ def wrench(session, domain, seconds, force_x):
     )
     Wrench = STORE.types[ros_type]
     Vector3 = STORE.types["geometry_msgs/msg/Vector3"]
-    command = Wrench(force=Vector3(x=force_x, y=0.0, z=0.0), torque=Vector3(x=0.0, y=0.0, z=0.0))
-    payload = bytes(STORE.serialize_cdr(command, ros_type))
     key = f"{domain}/cmd_wrench/{dds_type(ros_type)}/{type_hash(ros_type)}"
     publisher = session.declare_publisher(key)
     sent, deadline = 0, time.monotonic() + seconds
     while time.monotonic() < deadline:
-        sent += 1
+        sent += 1  # force.y numbers the commands, so a copy would show
+        force = Vector3(x=force_x, y=float(sent), z=0.0)
+        command = Wrench(force=force, torque=Vector3(x=0.0, y=0.0, z=0.0))
+        payload = bytes(STORE.serialize_cdr(command, ros_type))
         publisher.put(payload, attachment=attachment(sent))
         time.sleep(0.1)
     return {"sent": sent}
@@ -187,6 +190,27 @@ def call(session, domain, service, timeout_s):
     return {"error": "no reply", "replies": len(replies)}
 
 
+def take(session, domain, topic, count, timeout_s):
+    ros_type = "std_msgs/msg/String"
+    _, held = declare_node(session, domain, "zenoh_reader")
+    held.append(
+        declare_endpoint(
+            session, domain, "zenoh_reader", "MS", 1, topic, ros_type, type_hash(ros_type)
+        )
+    )
+    key = f"{domain}/{topic.strip('/')}/{dds_type(ros_type)}/{type_hash(ros_type)}"
+    data = []
+    with session.declare_subscriber(key) as subscriber:
+        deadline = time.monotonic() + timeout_s
+        while len(data) < count and time.monotonic() < deadline:
+            sample = subscriber.try_recv()
+            if sample is None:
+                time.sleep(0.01)
+                continue
+            data.append(STORE.deserialize_cdr(sample.payload.to_bytes(), ros_type).data)
+    return {"data": data}
+
+
 def bad(session, domain, topic):
     ros_type = "std_msgs/msg/String"
     mangled = topic.replace("/", "%")
@@ -222,6 +246,8 @@ def main(argv):
             result = imu(session, domain, int(args[0]), float(args[1]))
         elif command == "wrench":
             result = wrench(session, domain, float(args[0]), float(args[1]))
+        elif command == "take":
+            result = take(session, domain, args[0], int(args[1]), float(args[2]))
         elif command == "call":
             result = call(session, domain, args[0], float(args[1]))
         else:
