@@ -37,15 +37,17 @@ def zenoh_endpoint() -> str:
     return f"tcp/127.0.0.1:{port}"
 
 
-async def run_peer(endpoint: str, domain: int, *args: str, timeout_s: float = 90.0) -> Any:
-    """Run zenoh_peer.py in its own process; its last JSON line."""
+async def run_peer(
+    endpoint: str, domain: int, *args: str, timeout_s: float = 90.0, distro: str = "jazzy"
+) -> Any:
+    """Run zenoh_peer.py in its own process (as a node of `distro`); its last JSON line."""
     process = await asyncio.create_subprocess_exec(
         sys.executable,
         str(PEER),
         endpoint,
         str(domain),
         *args,
-        env={"PATH": "/usr/bin", "RUST_LOG": "error"},
+        env={"PATH": "/usr/bin", "RUST_LOG": "error", "ROS_DISTRO": distro},
         stdout=asyncio.subprocess.PIPE,
         stderr=asyncio.subprocess.PIPE,
     )

@@ -18,6 +18,12 @@ usage:
       announces, print the response.
   python3 zenoh_peer.py ENDPOINT DOMAIN take TOPIC COUNT TIMEOUT_S
       take COUNT std_msgs/msg/String samples from TOPIC; print their data in order.
+  python3 zenoh_peer.py ENDPOINT DOMAIN latched TOPIC TIMEOUT_S
+      join late: ask the publication caches of TOPIC (std_msgs/msg/String, transient local)
+      for their history as rmw_zenoh's transient-local subscriptions do; print the first.
+  python3 zenoh_peer.py ENDPOINT DOMAIN serve SERVICE SECONDS
+      provide std_srvs/srv/SetBool SERVICE (a queryable and its SS token) for SECONDS,
+      answering success = data, message "zenoh says <data>"; print the requests it served.
   python3 zenoh_peer.py ENDPOINT DOMAIN bad TOPIC
       publish std_msgs/msg/String on TOPIC three ways wrong (attachment of 20 bytes, a key
       naming a type nobody knows, a payload cut short) and then once right ("good").
@@ -54,6 +60,9 @@ def dds_type(ros_type):
 
 
 def type_hash(ros_type):
+    """RIHS01 from Jazzy on; Humble's rmw_zenoh writes TypeHashNotSupported instead."""
+    if os.environ.get("ROS_DISTRO") == "humble":
+        return "TypeHashNotSupported"
     return STORE.hash_rihs01(ros_type)
 
 
@@ -211,6 +220,50 @@ def take(session, domain, topic, count, timeout_s):
     return {"data": data}
 
 
+def latched(session, domain, topic, timeout_s):
+    from zenoh.ext import HistoryConfig, declare_advanced_subscriber
+
+    ros_type = "std_msgs/msg/String"
+    key = f"{domain}/{topic.strip('/')}/{dds_type(ros_type)}/{type_hash(ros_type)}"
+    history = HistoryConfig(detect_late_publishers=True)
+    with declare_advanced_subscriber(session, key, history=history) as subscriber:
+        deadline = time.monotonic() + timeout_s
+        while time.monotonic() < deadline:
+            sample = subscriber.try_recv()
+            if sample is not None:
+                return {"data": STORE.deserialize_cdr(sample.payload.to_bytes(), ros_type).data}
+            time.sleep(0.01)
+    return {"data": None}
+
+
+def serve(session, domain, service, seconds):
+    ros_type = "std_srvs/srv/SetBool"
+    # rosbags cannot hash a service type; a client takes the key from the server's token, so
+    # any hash works as long as the token and the queryable agree.
+    humble = os.environ.get("ROS_DISTRO") == "humble"
+    hash_ = "TypeHashNotSupported" if humble else "RIHS01_" + "5" * 64
+    _, held = declare_node(session, domain, "zenoh_gatekeeper")
+    held.append(
+        declare_endpoint(session, domain, "zenoh_gatekeeper", "SS", 1, service, ros_type, hash_)
+    )
+    served = []
+
+    def answer(query):
+        request = STORE.deserialize_cdr(query.payload.to_bytes(), "std_srvs/srv/SetBool_Request")
+        sequence, _, gid = z_deserialize(tuple[Int64, Int64, bytes], query.attachment)
+        served.append({"data": request.data, "sequence": int(sequence), "gid_length": len(gid)})
+        Response = STORE.types["std_srvs/srv/SetBool_Response"]
+        response = Response(success=request.data, message=f"zenoh says {request.data}")
+        payload = bytes(STORE.serialize_cdr(response, "std_srvs/srv/SetBool_Response"))
+        reply = z_serialize((Int64(int(sequence)), Int64(time.time_ns()), bytes(gid)))
+        query.reply(query.key_expr, payload, attachment=reply)
+
+    key = f"{domain}/{service.strip('/')}/{dds_type(ros_type)}/{hash_}"
+    with session.declare_queryable(key, answer, complete=True):  # as rmw_zenoh declares them
+        time.sleep(seconds)
+    return {"served": served}
+
+
 def bad(session, domain, topic):
     ros_type = "std_msgs/msg/String"
     mangled = topic.replace("/", "%")
@@ -246,6 +299,10 @@ def main(argv):
             result = imu(session, domain, int(args[0]), float(args[1]))
         elif command == "wrench":
             result = wrench(session, domain, float(args[0]), float(args[1]))
+        elif command == "latched":
+            result = latched(session, domain, args[0], float(args[1]))
+        elif command == "serve":
+            result = serve(session, domain, args[0], float(args[1]))
         elif command == "take":
             result = take(session, domain, args[0], int(args[1]), float(args[2]))
         elif command == "call":
