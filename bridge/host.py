@@ -77,6 +77,7 @@ class PluginHost:
         self._core = core
         self._edge = edge
         self._tasks: set[asyncio.Task[None]] = set()
+        self._graph_nodes: dict[str, frozenset[str]] = {}  # source -> nodes it speaks for
 
     # -- what a plug-in reads ----------------------------------------------------------------
 
@@ -224,6 +225,20 @@ class PluginHost:
     def may_read_metrics(self, authorization: str | None) -> bool:
         """Whether an HTTP request with this `Authorization` header may read /metrics."""
         return self._core.may_read_metrics(bearer_token(authorization), time.time_ns())
+
+    # -- gateways between graphs --------------------------------------------------------------
+
+    def claim_nodes(self, source: str, nodes: Iterable[str]) -> None:
+        """The nodes graph plug-in `source` ("dds", "zenoh") speaks for: their messages and
+        endpoints are its graph's, so it never sends them back there."""
+        self._graph_nodes[source] = frozenset(nodes)
+
+    def gateway_nodes(self, source: str) -> frozenset[str]:
+        """Nodes other graph plug-ins speak for: `source` carries their messages, endpoints
+        and services into its graph as it carries the websocket clients' (a gateway), so
+        each message crosses once and never comes back."""
+        others = [nodes for name, nodes in self._graph_nodes.items() if name != source]
+        return frozenset().union(*others)
 
     def _apply(self, effects: list[Effect]) -> None:
         if effects:
