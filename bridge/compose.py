@@ -14,6 +14,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import bridge.dds
+import bridge.foxglove.plugin
 from bridge.access import scheme
 from bridge.config import BridgeConfig
 from bridge.core import BridgeCore
@@ -32,6 +33,7 @@ def plugin_table(config: BridgeConfig) -> list[tuple[str, bool, PluginFactory]]:
         ("dashboard", True, Dashboard),
         ("telemetry", True, BridgeTelemetry),
         ("dds", config.dds, bridge.dds.plugin),
+        ("foxglove", True, bridge.foxglove.plugin.plugin),
     ]
 
 
