@@ -46,7 +46,8 @@ class ProtocolConnection(Protocol):
     def close(self) -> None: ...
 
 
-ProtocolFactory = Callable[[int], ProtocolConnection]  # client id (already connected) -> it
+# (client id, already connected; the subprotocol it chose) -> its connection
+ProtocolFactory = Callable[[int, str], ProtocolConnection]
 
 
 class Plugin(Protocol):

@@ -167,7 +167,7 @@ class BridgeServer:
 
         intake = Intake(client_id, self.core, self._pool, apply)
         factory = self.protocols.get(ws.subprotocol) if ws.subprotocol else None
-        other = factory(client_id) if factory is not None else None
+        other = factory(client_id, ws.subprotocol or "") if factory is not None else None
         if other is not None:
             self._translators[client_id] = other.outgoing
         self._tell_clients_changed()

@@ -91,4 +91,4 @@ class PlaybackWatch:
         self._broadcast(wire.time_frame(state.current_ns), None, "foxglove:time")
         if previous is None or (previous.status, previous.speed) != (state.status, state.speed):
             frame = wire.playback_state(state.status, state.current_ns, state.speed, False, None)
-            self._broadcast(frame)
+            self._broadcast(frame, lambda connection: connection.playback_control)

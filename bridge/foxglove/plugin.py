@@ -52,9 +52,9 @@ class FoxglovePlugin:
     async def stop(self) -> None:
         self.playback.stop()
 
-    def _connect(self, client_id: int) -> FoxgloveConnection:
+    def _connect(self, client_id: int, subprotocol: str) -> FoxgloveConnection:
         self.reconcile()
-        connection = FoxgloveConnection(self, client_id)
+        connection = FoxgloveConnection(self, client_id, subprotocol == wire.SDK_V1)
         self.connections[client_id] = connection
         return connection
 
@@ -103,7 +103,7 @@ class FoxglovePlugin:
             if wanted is None or wanted(connection):
                 connection.send(data, drop_key)
 
-    def server_info(self) -> bytes:
+    def server_info(self, playback_control: bool) -> bytes:
         capabilities = [
             "clientPublish",
             "parameters",
@@ -120,7 +120,7 @@ class FoxglovePlugin:
         }
         window = self.playback.window()
         if window is not None:
-            capabilities += ["time", "playbackControl"]
+            capabilities += ["time", "playbackControl"] if playback_control else ["time"]
             fields["dataStartTime"], fields["dataEndTime"] = (wire.stamp(ns) for ns in window)
         return wire.json_frame("serverInfo", **fields)
 
@@ -128,15 +128,18 @@ class FoxglovePlugin:
 class FoxgloveConnection:
     """One Foxglove client: runs its session's ops as core calls, sends its frames."""
 
-    def __init__(self, plugin: FoxglovePlugin, client_id: int) -> None:
+    def __init__(self, plugin: FoxglovePlugin, client_id: int, playback_control: bool) -> None:
         self.plugin = plugin
+        # Playback control (PlaybackState frames) is the SDK's foxglove.sdk.v1 only: a
+        # foxglove.websocket.v1 client does not know its opcode.
+        self.playback_control = playback_control
         self.host = plugin.host
         self.client_id = client_id
         self.session = FoxgloveSession(client_id, plugin.table, self.host.registry, plugin.permit)
         self.session.clock = plugin.playback.message_time
         # Problems with its ops come back as rosbridge `status`, turned into Foxglove ones.
         self.host.send_op(client_id, {"op": "set_level", "level": "warning"})
-        self.send(plugin.server_info())
+        self.send(plugin.server_info(playback_control))
         if plugin.table.by_id:
             self.send(wire.json_frame("advertise", channels=plugin.table.channel_adverts()))
         if plugin.table.services_by_id:
