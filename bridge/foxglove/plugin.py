@@ -135,7 +135,7 @@ class FoxgloveConnection:
         self.playback_control = playback_control
         self.host = plugin.host
         self.client_id = client_id
-        self.session = FoxgloveSession(client_id, plugin.table, self.host.registry, plugin.permit)
+        self.session = FoxgloveSession(client_id, plugin.table, self.host.registry, self.permit)
         self.session.clock = plugin.playback.message_time
         # Problems with its ops come back as rosbridge `status`, turned into Foxglove ones.
         self.host.send_op(client_id, {"op": "set_level", "level": "warning"})
@@ -145,6 +145,14 @@ class FoxgloveConnection:
         if plugin.table.services_by_id:
             services = plugin.table.service_adverts()
             self.send(wire.json_frame("advertiseServices", services=services))
+
+    def permit(self, action: str, name: str) -> str | None:
+        """Whether this client may do `action` on `name` (None: yes, else why not). With an
+        auth secret nothing is allowed: Foxglove's protocol has no rosauth `auth` op."""
+        session = self.host.clients().get(self.client_id)
+        if session is None or not session.authenticated:
+            return "not authenticated: this bridge needs rosauth, which Foxglove cannot send"
+        return self.plugin.permit(action, name)
 
     def send(self, data: bytes, drop_key: str | None = None) -> None:
         text = data[:1] == b"{"
