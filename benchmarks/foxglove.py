@@ -72,10 +72,11 @@ async def publish(url: str, imu_hz: float, scan_hz: float, scan: dict, stop: asy
     async with websockets.connect(url, compression=None, max_size=None) as ws:
         for topic, type_name in ((IMU_TOPIC, IMU_TYPE), (SCAN_TOPIC, SCAN_TYPE)):
             await ws.send(json.dumps({"op": "advertise", "topic": topic, "type": type_name}))
-        period_s, tick, every = 1.0 / imu_hz, 0, max(1, round(imu_hz / scan_hz))
+        period_s, tick = 1.0 / imu_hz, 0
+        every = max(1, round(imu_hz / scan_hz)) if scan_hz > 0 else 0  # 0: no scan
         next_s = time.perf_counter()
         while not stop.is_set():
-            if tick % every == 0:
+            if every and tick % every == 0:
                 msg = {**scan, "header": {"stamp": stamp(time.time_ns()), "frame_id": "lidar"}}
                 await ws.send(codec_cbor.dumps({"op": "publish", "topic": SCAN_TOPIC, "msg": msg}))
             imu = {"header": {"stamp": stamp(time.time_ns()), "frame_id": "imu"}}
@@ -206,7 +207,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seconds", type=float, default=8.0, help="window per run")
     parser.add_argument("--repeat", type=int, default=3, help="interleaved rounds")
     parser.add_argument("--imu-hz", type=float, default=200.0)
-    parser.add_argument("--scan-hz", type=float, default=2.0)
+    parser.add_argument("--scan-hz", type=float, default=2.0, help="0: the IMU alone")
     parser.add_argument("--scan-points", type=int, default=179_000, help="~ a full scan's hits")
     args = parser.parse_args(argv)
     with contextlib.suppress(FileNotFoundError), open("/proc/loadavg") as load:
