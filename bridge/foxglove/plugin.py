@@ -23,11 +23,14 @@ from bridge.foxglove.graph_view import connection_graph, graph_changes
 from bridge.foxglove.playback import STATE_TOPIC, PlaybackWatch
 from bridge.foxglove.session import FoxgloveSession, Permit, allow_all
 from bridge.host import PluginHost
+from bridge.problems import ProblemLog
+from schemas.safety import safe_text
 
 logger = logging.getLogger("bridge.foxglove")
 
 WATCH_S = 0.1  # how often the graph, parameters and player are compared with what clients know
 SERVER_NAME = "riverbridge"
+GRAPH_OPS = frozenset({"advertise", "unadvertise", "subscribe", "unsubscribe"})
 
 
 class FoxglovePlugin:
@@ -137,6 +140,9 @@ class FoxgloveConnection:
         self.client_id = client_id
         self.session = FoxgloveSession(client_id, plugin.table, self.host.registry, self.permit)
         self.session.clock = plugin.playback.message_time
+        session = self.host.clients().get(client_id)
+        self.node = session.node if session is not None else f"client {client_id}"
+        self._problems = ProblemLog()  # bad input: logged per line up to a rate, then counted
         # Problems with its ops come back as rosbridge `status`, turned into Foxglove ones.
         self.host.send_op(client_id, {"op": "set_level", "level": "warning"})
         self.send(plugin.server_info(playback_control))
@@ -160,6 +166,8 @@ class FoxgloveConnection:
 
     def receive(self, data: bytes | str) -> None:
         reply = self.session.receive(data)
+        for problem in reply.problems:
+            self._log_problem(reply.op, problem)
         for frame in reply.frames:
             self.send(frame)
         for op in reply.ops:
@@ -169,7 +177,7 @@ class FoxgloveConnection:
             self.send(self.session.parameter_values(names, self.host.parameters(), request_id))
         if reply.asset is not None:
             self.host.spawn(self._fetch(reply.asset), "foxglove fetchAsset")
-        if reply.ops:
+        if any(op["op"] in GRAPH_OPS for op in reply.ops):
             self.plugin.reconcile()  # its advertisements are channels for the others at once
         if self.session.graph_subscribed and not self.session.graph_sent:
             self.session.graph_sent = True
@@ -182,8 +190,20 @@ class FoxgloveConnection:
     def outgoing(self, send: Send) -> list[Send]:
         return self.session.outgoing(send)
 
+    def _log_problem(self, op: str, problem: str) -> None:
+        """One line per problem naming client, op and problem; past 20 in 10 s, a summary."""
+        now_ns = self.host.now_ns()
+        summary = self._problems.expired_summary(now_ns, self.node, "Foxglove problems")
+        if summary is not None:
+            logger.warning("%s", summary)
+        if self._problems.note(now_ns)[0]:
+            logger.warning("[%s] Foxglove op=%s: %s", self.node, safe_text(op, 60), problem)
+
     def close(self) -> None:
         self.plugin.connections.pop(self.client_id, None)
+        summary = self._problems.summary(self.node, self.host.now_ns(), "Foxglove problems")
+        if summary is not None:
+            logger.warning("%s", summary)
 
 
 def plugin(host: PluginHost) -> FoxglovePlugin:

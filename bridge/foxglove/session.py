@@ -37,6 +37,7 @@ SUB, CHANNEL, CALL, PARAM, PLAYBACK = "fg:", "fgc:", "fgs:", "fgp:", "fgpb:"
 #: (action, name) -> None to allow, else why not. Actions: subscribe, publish, call,
 #: get_param, set_param, fetch_asset, playback, graph.
 Permit = Callable[[str, str], str | None]
+STATUS_PREFIX = b'{"op":"status"'
 
 
 def allow_all(action: str, name: str) -> str | None:
@@ -64,6 +65,8 @@ class Reply:
     ops: list[JsonObject] = field(default_factory=list)
     asset: wire.FetchAsset | None = None
     parameters_after: tuple[list[str], str | None] | None = None
+    op: str = "?"  # the op or binary opcode of the frame, for log lines
+    problems: list[str] = field(default_factory=list)  # what its statuses say
 
 
 class FoxgloveSession:
@@ -93,15 +96,23 @@ class FoxgloveSession:
     # -- inbound ------------------------------------------------------------------------------
 
     def receive(self, data: bytes | str) -> Reply:
-        """Handle one frame; a frame that breaks the protocol is answered with a `status`."""
+        """Handle one frame; a frame that breaks the protocol is answered with a `status`
+        (and listed in `Reply.problems` with the op it concerns, for the log)."""
         reply = Reply()
         try:
             if isinstance(data, str):
-                self._text(wire.parse_text(data), reply)
+                reply.op = "?"
+                op = wire.parse_text(data)
+                reply.op = op.op
+                self._text(op, reply)
             else:
+                reply.op = f"binary opcode {data[0]}" if data else "binary"
                 self._binary(wire.parse_binary(data), reply)
         except wire.FoxgloveWireError as exc:
             reply.frames.append(wire.status(wire.ERROR, str(exc)))
+        reply.problems = [
+            orjson.loads(f)["message"] for f in reply.frames if f.startswith(STATUS_PREFIX)
+        ]
         return reply
 
     def _refusal(self, reply: Reply, action: str, name: str) -> bool:

@@ -118,3 +118,30 @@ async def wait_for_channel(ws: Any, topic: str) -> int:
         found = [c["id"] for c in channels if c["topic"] == topic]
         if found:
             return int(found[0])
+
+
+async def test_hostile_frames_get_a_status_and_one_log_line_each(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    hostile: list[str | bytes] = [
+        "{not json",
+        '{"op": "frobnicate"}',
+        b"\x09\x00",
+        b"\x01\x05\x00\x00\x00cdr",
+        '{"op": "subscribe", "subscriptions": [{"id": 1, "channelId": 424242}]}',
+    ]
+    async with (
+        run_bridge(BridgeConfig(port=0)) as bridge,
+        websockets.connect(bridge.url, subprotocols=[FOXGLOVE]) as ws,
+    ):
+        for frame in hostile:
+            await ws.send(frame)
+            status = await next_json(ws, "status")
+            assert status["level"] == 2
+        await ws.send('{"op": "subscribeConnectionGraph"}')  # still served
+        assert "publishedTopics" in await next_json(ws, "connectionGraphUpdate")
+    lines = [r.getMessage() for r in caplog.records if "Foxglove op=" in r.getMessage()]
+    assert len(lines) == len(hostile), lines
+    assert lines[1].endswith("Foxglove op=?: unknown op: 'frobnicate'")
+    assert "op=binary opcode 1: message on unknown client channel 5" in lines[3]
+    assert all(line.startswith("[/rosbridge_client_") for line in lines)
