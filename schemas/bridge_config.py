@@ -146,6 +146,18 @@ class BridgeConfig(BaseModel):
             exists="dir",
         ),
     ] = ()
+    # Foxglove clients' fetchAsset: files under these folders only (bridge/foxglove/assets.py).
+    asset_dirs: Annotated[
+        tuple[Path, ...],
+        Option(
+            "--asset-dir",
+            NETWORK,
+            "serve this folder's meshes to Foxglove clients as package://<name>/... (repeatable)",
+            "DIR",
+            many="append",
+            exists="dir",
+        ),
+    ] = ()
     # ROS distribution reported by /rosapi/get_ros_version.
     distro: str = "jazzy"
     # Built web dashboard served at http://host:port/; None = $RIVERBRIDGE_WEB_ROOT or the
