@@ -28,6 +28,7 @@ SUBCOMMANDS: dict[str, tuple[str, str]] = {
         "clients.recording.play_cli",
         "publish an MCAP recording into a bridge at its recorded timing",
     ),
+    "link": ("clients.linkemu.cli", "carry connections over an emulated lan, wifi or 4g link"),
 }
 
 

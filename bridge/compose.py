@@ -14,6 +14,8 @@ from dataclasses import dataclass
 from typing import Any
 
 import bridge.dds
+import bridge.foxglove.plugin
+import bridge.zenoh
 from bridge.access import scheme
 from bridge.audit import AuditTrail
 from bridge.config import BridgeConfig
@@ -34,6 +36,8 @@ def plugin_table(config: BridgeConfig) -> list[tuple[str, bool, PluginFactory]]:
         ("telemetry", True, BridgeTelemetry),
         ("dds", config.dds, bridge.dds.plugin),
         ("audit", config.audit_log is not None, AuditTrail),
+        ("zenoh", config.zenoh, bridge.zenoh.plugin),
+        ("foxglove", True, bridge.foxglove.plugin.plugin),
     ]
 
 

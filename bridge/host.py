@@ -36,6 +36,22 @@ logger = logging.getLogger("bridge.host")
 Receiver = Callable[[Send], None]  # takes what the core sends an in-process client
 
 
+class ProtocolConnection(Protocol):
+    """One websocket client of another protocol (Foxglove's), chosen by its subprotocol: the
+    edge hands it every frame the client sends, and what the core sends the client passes
+    `outgoing` (which returns the sends to write, in that protocol) before the send queue."""
+
+    def receive(self, data: bytes | str) -> None: ...
+
+    def outgoing(self, send: Send) -> list[Send]: ...
+
+    def close(self) -> None: ...
+
+
+# (client id, already connected; the subprotocol it chose) -> its connection
+ProtocolFactory = Callable[[int, str], ProtocolConnection]
+
+
 class Plugin(Protocol):
     """Started after the server listens, stopped (in reverse order) before it closes."""
 
@@ -51,6 +67,7 @@ class Edge(Protocol):
     internal_clients: dict[int, Receiver]
     delivered: Delivered
     clients_changed: list[Callable[[], None]]
+    protocols: dict[str, ProtocolFactory]
 
     def apply(self, effects: list[Effect]) -> None: ...
 
@@ -77,6 +94,7 @@ class PluginHost:
         self._core = core
         self._edge = edge
         self._tasks: set[asyncio.Task[None]] = set()
+        self._graph_nodes: dict[str, frozenset[str]] = {}  # source -> nodes it speaks for
 
     # -- what a plug-in reads ----------------------------------------------------------------
 
@@ -109,6 +127,14 @@ class PluginHost:
         """Messages per topic a websocket client's send queue dropped (empty if none)."""
         return self._edge.send_queue_drops(client_id)
 
+    def parameters(self) -> Mapping[str, str]:
+        """The bridge's own parameters (rosapi's), name -> JSON text; read, never written."""
+        return self._core.state.params
+
+    def answered_services(self) -> Mapping[str, str]:
+        """Services the bridge answers itself (rosapi, stats): name -> type."""
+        return {name: service.type_name for name, service in self._core.state.rosapi.items()}
+
     @staticmethod
     def now_ns() -> int:
         return time.time_ns()
@@ -122,6 +148,15 @@ class PluginHost:
     def observe_deliveries(self, delivered: Delivered) -> None:
         """Tell `delivered` when each delivery's frames were written (one observer)."""
         self._edge.delivered = delivered
+
+    def serve_subprotocols(self, names: Iterable[str], factory: ProtocolFactory) -> None:
+        """Websocket clients offering one of `names` speak that protocol through `factory`."""
+        for name in names:
+            self._edge.protocols[name] = factory
+
+    def deliver(self, send: Send) -> None:
+        """Queue a frame (an `Outgoing` item) for a client, like the core's own sends."""
+        self._edge.apply([send])
 
     def spawn(self, work: Coroutine[Any, Any, None], name: str) -> None:
         """Run `work` (periodic publishing, a reconcile loop) until the host closes."""
@@ -225,9 +260,31 @@ class PluginHost:
         """Whether an HTTP request with this `Authorization` header may read /metrics."""
         return self._core.may_read_metrics(bearer_token(authorization), time.time_ns())
 
+    # -- gateways between graphs --------------------------------------------------------------
+
+    def claim_nodes(self, source: str, nodes: Iterable[str]) -> None:
+        """The nodes graph plug-in `source` ("dds", "zenoh") speaks for: their messages and
+        endpoints are its graph's, so it never sends them back there."""
+        self._graph_nodes[source] = frozenset(nodes)
+
+    def gateway_nodes(self, source: str) -> frozenset[str]:
+        """Nodes other graph plug-ins speak for: `source` carries their messages, endpoints
+        and services into its graph as it carries the websocket clients' (a gateway), so
+        each message crosses once and never comes back."""
+        others = [nodes for name, nodes in self._graph_nodes.items() if name != source]
+        return frozenset().union(*others)
+
     def _apply(self, effects: list[Effect]) -> None:
         if effects:
             self._edge.apply(effects)
 
 
-__all__ = ["Edge", "GraphView", "Plugin", "PluginHost", "Receiver"]
+__all__ = [
+    "Edge",
+    "GraphView",
+    "Plugin",
+    "PluginHost",
+    "ProtocolConnection",
+    "ProtocolFactory",
+    "Receiver",
+]

@@ -32,7 +32,10 @@ SECURITY = 'access control (docs/bridge.md, "Security and hostile input")'
 TYPES = "message types"
 DASHBOARD = "web dashboard"
 DDS = "ROS 2 over DDS (docs/ros2.md)"
-GROUPS = (NETWORK, LIMITS, SECURITY, TYPES, DASHBOARD, DDS)
+ZENOH = "ROS 2 over Zenoh, rmw_zenoh's wire format (docs/zenoh.md)"
+GROUPS = (NETWORK, LIMITS, SECURITY, TYPES, DASHBOARD, DDS, ZENOH)
+# A Zenoh endpoint: <protocol>/<address>[#<metadata>] (tcp/127.0.0.1:7447, udp/[::1]:0).
+ZENOH_ENDPOINT = r"^[a-z0-9]+/[A-Za-z0-9._:\[\]%-]+(#[A-Za-z0-9=;._-]*)?$"
 
 
 def secret_of(path: Path) -> SecretStr:
@@ -143,6 +146,18 @@ class BridgeConfig(BaseModel):
             exists="dir",
         ),
     ] = ()
+    # Foxglove clients' fetchAsset: files under these folders only (bridge/foxglove/assets.py).
+    asset_dirs: Annotated[
+        tuple[Path, ...],
+        Option(
+            "--asset-dir",
+            NETWORK,
+            "serve this folder's meshes to Foxglove clients as package://<name>/... (repeatable)",
+            "DIR",
+            many="append",
+            exists="dir",
+        ),
+    ] = ()
     # ROS distribution reported by /rosapi/get_ros_version.
     distro: str = "jazzy"
     # Built web dashboard served at http://host:port/; None = $RIVERBRIDGE_WEB_ROOT or the
@@ -228,6 +243,63 @@ class BridgeConfig(BaseModel):
             negate=True,
         ),
     ] = True
+    # ROS 2 over Zenoh (docs/zenoh.md): with `zenoh` the bridge opens a Zenoh session (peer
+    # mode, multicast scouting off) in ROS domain `dds_domain` (`--domain`) and behaves on the
+    # wire like an rmw_zenoh node of `zenoh_distro`. It connects to `zenoh_connect` (rmw_zenoh's
+    # router on this host unless told) and listens on `zenoh_listen` (the loopback unless told).
+    zenoh: Annotated[
+        bool,
+        Option(
+            "--zenoh",
+            ZENOH,
+            "join ROS 2's Zenoh graph as an rmw_zenoh node and mirror topics and services both "
+            "ways (with --dds too: a DDS <-> Zenoh gateway)",
+            env="RIVERBRIDGE_ZENOH",
+        ),
+    ] = False
+    zenoh_listen: Annotated[
+        tuple[Annotated[str, Field(pattern=ZENOH_ENDPOINT)], ...],
+        Option(
+            "--zenoh-listen",
+            ZENOH,
+            "Zenoh endpoint to listen on, repeatable or comma-separated (default tcp/127.0.0.1:0)",
+            "ENDPOINT",
+            env="RIVERBRIDGE_ZENOH_LISTEN",
+            many="append",
+            split=",",
+        ),
+    ] = ()
+    zenoh_connect: Annotated[
+        tuple[Annotated[str, Field(pattern=ZENOH_ENDPOINT)], ...],
+        Option(
+            "--zenoh-connect",
+            ZENOH,
+            "Zenoh router or peer to connect to, repeatable or comma-separated (default "
+            "tcp/127.0.0.1:7447, rmw_zenohd's, unless --zenoh-listen is given)",
+            "ENDPOINT",
+            env="RIVERBRIDGE_ZENOH_CONNECT",
+            many="append",
+            split=",",
+        ),
+    ] = ()
+    # A Zenoh configuration file (json5) the session starts from; the options above win.
+    zenoh_config: Annotated[
+        Path | None,
+        Option(
+            "--zenoh-config",
+            ZENOH,
+            "Zenoh session configuration file (json5) to start from; --zenoh-listen and "
+            "--zenoh-connect override its endpoints",
+            "FILE",
+            env="RIVERBRIDGE_ZENOH_CONFIG",
+            exists="file",
+        ),
+    ] = None
+    # Jazzy and later put the RIHS01 type hash in keys and tokens, Humble TypeHashNotSupported.
+    zenoh_distro: Annotated[
+        Literal["humble", "jazzy", "kilted", "rolling"],
+        Option("--zenoh-distro", ZENOH, "the ROS 2 distribution whose rmw_zenoh keys to use"),
+    ] = "jazzy"
     # Access control (bridge.access, docs/bridge.md "Security and hostile input").
     # rosauth secret (first line of --auth-secret-file); None = no authentication, as ROS 2
     # rosbridge. With it, every op before a valid `auth` op is refused (protocol §1.5).

@@ -63,6 +63,10 @@ BRIDGE_OPTIONS = (
     "dds_peers",
     "roles",
     "audit_log",
+    "zenoh",
+    "zenoh_listen",
+    "zenoh_connect",
+    "zenoh_config",
 )
 PASSED = " (passed to the bridge)"
 
