@@ -114,7 +114,13 @@ class BridgeCore:
             return f"client {client_id} is not connected"
         if not session.authenticated:
             return "not authenticated"
-        return self.state.policy.authorize(session, Action(action), absolute_name(name))
+        asked = Action(action)
+        if asked not in (Action.GET_PARAM, Action.SET_PARAM):  # parameters keep their names
+            try:
+                name = absolute_name(name)
+            except InvalidNameError as exc:
+                return str(exc)
+        return self.state.policy.authorize(session, asked, name)
 
     def disconnect(self, client_id: int, now_ns: int) -> list[Effect]:
         """Release everything the client owned and answer whatever waited on it."""

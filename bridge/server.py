@@ -177,7 +177,7 @@ class BridgeServer:
         self.apply(self.core.admit(client_id, time.time_ns(), token))
         try:
             if other is not None:
-                await self._read_other(ws, other)
+                await self._read_other(ws, other, client_id)
                 return
             busy_s = 0.0  # time spent handling this client's frames since it last yielded
             async for data in ws:
@@ -214,16 +214,19 @@ class BridgeServer:
         if until_ns is not None:
             await asyncio.sleep(max(0.0, (until_ns - time.time_ns()) / 1e9))
 
-    @staticmethod
-    async def _read_other(ws: ServerConnection, other: ProtocolConnection) -> None:
-        """Frames of another protocol's client, with the same fair turns as rosbridge's."""
+    async def _read_other(
+        self, ws: ServerConnection, other: ProtocolConnection, client_id: int
+    ) -> None:
+        """Frames of another protocol's client, with the same fair turns as rosbridge's and
+        the same hold past its quota."""
         busy_s = 0.0
         async for data in ws:
             started = time.perf_counter()
             other.receive(data)
             busy_s += time.perf_counter() - started
-            if busy_s > TURN_S:
+            if busy_s > TURN_S or client_id in self._holds:
                 await asyncio.sleep(0)
+                await self._held(client_id)
                 busy_s = 0.0
 
     def _tell_clients_changed(self) -> None:

@@ -128,6 +128,18 @@ class FoxglovePlugin:
         return wire.json_frame("serverInfo", **fields)
 
 
+# Foxglove client actions checked against the client's role (schemas.roles_config.Action);
+# fetching assets and reading the connection graph are open to every authenticated client.
+ROLE_ACTIONS = {
+    "subscribe": "subscribe",
+    "publish": "publish",
+    "call": "call_service",
+    "get_param": "get_param",
+    "set_param": "set_param",
+    "playback": "call_service",
+}
+
+
 class FoxgloveConnection:
     """One Foxglove client: runs its session's ops as core calls, sends its frames."""
 
@@ -154,10 +166,18 @@ class FoxgloveConnection:
 
     def permit(self, action: str, name: str) -> str | None:
         """Whether this client may do `action` on `name` (None: yes, else why not). With an
-        auth secret nothing is allowed: Foxglove's protocol has no rosauth `auth` op."""
+        auth secret it must have presented a bridge token at the handshake (`?token=` or
+        `Authorization: Bearer`; Foxglove's protocol has no `auth` op), and its role (`--roles`)
+        decides as for a rosbridge client (`host.authorize`, bridge.roles)."""
         session = self.host.clients().get(self.client_id)
         if session is None or not session.authenticated:
-            return "not authenticated: this bridge needs rosauth, which Foxglove cannot send"
+            return "not authenticated: connect with ?token=TOKEN (riverbridge token)"
+        role_action = ROLE_ACTIONS.get(action)
+        if role_action is not None:
+            for one in name.split(",") if action == "get_param" else [name]:
+                why = self.host.authorize(self.client_id, role_action, one)
+                if why is not None:
+                    return why
         return self.plugin.permit(action, name)
 
     def send(self, data: bytes, drop_key: str | None = None) -> None:

@@ -62,7 +62,7 @@ async def test_a_refused_origin_is_refused_for_foxglove_too() -> None:
 
 
 async def test_with_an_auth_secret_a_foxglove_client_may_do_nothing() -> None:
-    """Foxglove's protocol has no rosauth op: until roles give it a way in, it is refused."""
+    """Foxglove's protocol has no rosauth op: without a token at the handshake, refused."""
     config = BridgeConfig(port=0, auth_secret=SecretStr("s3cret"))
     async with (
         run_bridge(config) as bridge,
