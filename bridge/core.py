@@ -101,6 +101,10 @@ class BridgeCore:
             return []
         if token is not None and self.state.config.auth_secret is not None:
             auth.authenticate_token(ctx, session, token, None)
+        elif session.grant is not None:  # anonymous, with the unauthenticated role
+            problem = self.state.policy.anonymous_limit(session, self.state.sessions.values())
+            if problem is not None:
+                auth.refuse(ctx, session, None, problem)
         elif not session.authenticated:
             grace_ns = int(self.state.config.auth_grace_s * 1e9)
             ctx.schedule(("auth_grace", client_id), now_ns + grace_ns)

@@ -239,15 +239,6 @@ class PluginHost:
         before every rosbridge op; a mirror acting for a client asks with that client's id."""
         return self._core.authorize(client_id, action, name)
 
-    def connect_client(self, receive: Receiver, peer: str = "", token: str | None = None) -> int:
-        """A client of another protocol (Foxglove) that the core treats like a websocket
-        client: it must authenticate (with `token`, checked now; a bad one is closed) and
-        gets its role's rights. What the core sends it goes to `receive`."""
-        client_id = self._core.connect(peer)
-        self._edge.internal_clients[client_id] = receive
-        self._apply(self._core.admit(client_id, time.time_ns(), token))
-        return client_id
-
     def set_audit(self, sink: AuditSink) -> None:
         """Where the policy writes its audit entries (`bridge.audit`, `--audit-log`)."""
         self._core.set_audit(sink)

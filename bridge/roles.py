@@ -203,6 +203,19 @@ class Policy:
         session.grant = None if role is None else new_grant(role_name or "", role, now_ns)
         return None
 
+    def anonymous_limit(
+        self, session: ClientSession, sessions: Iterable[ClientSession]
+    ) -> str | None:
+        """The unauthenticated role's `connections` limit, counted over anonymous clients."""
+        grant = session.grant
+        most = grant.role.limits.connections if grant is not None else None
+        if most is None:
+            return None
+        same = sum(1 for s in sessions if not s.principal and s.grant and s is not session)
+        if same < most:
+            return None
+        return f"{same} anonymous clients already (role {session.role} allows {most})"
+
     def check(
         self, session: ClientSession, op_name: str, message: JsonObject, wire: int, now_ns: int
     ) -> Refusal | None:

@@ -360,3 +360,17 @@ def test_goals_are_for_roles_that_may_send_them(bridge):
         ("dash", "advertise_action", "refused"),
         ("teleop", "send_action_goal", "allowed"),
     ]
+
+
+def test_the_unauthenticated_roles_connection_limit_counts_anonymous_clients(registry):
+    limited = RolesConfig.model_validate(
+        {
+            "unauthenticated_role": "guest",
+            "roles": {"guest": {"subscribe": ["*"], "limits": {"connections": 1}}},
+        }
+    )
+    h = CoreHarness(registry, roles=limited)
+    first, second = join(h, None), join(h, None)
+    [close] = h.closes
+    assert close.client_id == second and "1 anonymous clients already" in close.reason
+    assert h.call(first, "/rosapi/get_time")["result"] is False  # guest: no rosapi either
