@@ -14,8 +14,10 @@ from dataclasses import dataclass
 from typing import Any
 
 import bridge.dds
+import bridge.foxglove.plugin
 import bridge.zenoh
 from bridge.access import scheme
+from bridge.audit import AuditTrail
 from bridge.config import BridgeConfig
 from bridge.core import BridgeCore
 from bridge.host import Plugin, PluginHost
@@ -33,7 +35,9 @@ def plugin_table(config: BridgeConfig) -> list[tuple[str, bool, PluginFactory]]:
         ("dashboard", True, Dashboard),
         ("telemetry", True, BridgeTelemetry),
         ("dds", config.dds, bridge.dds.plugin),
+        ("audit", config.audit_log is not None, AuditTrail),
         ("zenoh", config.zenoh, bridge.zenoh.plugin),
+        ("foxglove", True, bridge.foxglove.plugin.plugin),
     ]
 
 

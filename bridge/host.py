@@ -22,16 +22,34 @@ from bridge.effects import Effect, Send
 from bridge.graph import ActionEntry, ServiceEntry, TopicEntry
 from bridge.http import HttpRoutes
 from bridge.link import Delivered
+from bridge.roles import AuditSink, PrincipalCounters, bearer_token
 from bridge.rosapi.common import RosapiHandler, RosapiService
 from bridge.session import ClientSession
 from bridge.sinks import MessageSink
 from schemas.registry import TypeRegistry
+from schemas.roles_config import Action
 from schemas.runtime.event_loop import cancel_and_wait
 from schemas.values import JsonObject, OpId
 
 logger = logging.getLogger("bridge.host")
 
 Receiver = Callable[[Send], None]  # takes what the core sends an in-process client
+
+
+class ProtocolConnection(Protocol):
+    """One websocket client of another protocol (Foxglove's), chosen by its subprotocol: the
+    edge hands it every frame the client sends, and what the core sends the client passes
+    `outgoing` (which returns the sends to write, in that protocol) before the send queue."""
+
+    def receive(self, data: bytes | str) -> None: ...
+
+    def outgoing(self, send: Send) -> list[Send]: ...
+
+    def close(self) -> None: ...
+
+
+# (client id, already connected; the subprotocol it chose) -> its connection
+ProtocolFactory = Callable[[int, str], ProtocolConnection]
 
 
 class Plugin(Protocol):
@@ -49,6 +67,7 @@ class Edge(Protocol):
     internal_clients: dict[int, Receiver]
     delivered: Delivered
     clients_changed: list[Callable[[], None]]
+    protocols: dict[str, ProtocolFactory]
 
     def apply(self, effects: list[Effect]) -> None: ...
 
@@ -108,6 +127,14 @@ class PluginHost:
         """Messages per topic a websocket client's send queue dropped (empty if none)."""
         return self._edge.send_queue_drops(client_id)
 
+    def parameters(self) -> Mapping[str, str]:
+        """The bridge's own parameters (rosapi's), name -> JSON text; read, never written."""
+        return self._core.state.params
+
+    def answered_services(self) -> Mapping[str, str]:
+        """Services the bridge answers itself (rosapi, stats): name -> type."""
+        return {name: service.type_name for name, service in self._core.state.rosapi.items()}
+
     @staticmethod
     def now_ns() -> int:
         return time.time_ns()
@@ -121,6 +148,15 @@ class PluginHost:
     def observe_deliveries(self, delivered: Delivered) -> None:
         """Tell `delivered` when each delivery's frames were written (one observer)."""
         self._edge.delivered = delivered
+
+    def serve_subprotocols(self, names: Iterable[str], factory: ProtocolFactory) -> None:
+        """Websocket clients offering one of `names` speak that protocol through `factory`."""
+        for name in names:
+            self._edge.protocols[name] = factory
+
+    def deliver(self, send: Send) -> None:
+        """Queue a frame (an `Outgoing` item) for a client, like the core's own sends."""
+        self._edge.apply([send])
 
     def spawn(self, work: Coroutine[Any, Any, None], name: str) -> None:
         """Run `work` (periodic publishing, a reconcile loop) until the host closes."""
@@ -194,6 +230,36 @@ class PluginHost:
         """The nodes another graph (`source`: "dds", "zenoh"...) has, for rosapi's listings."""
         self._core.set_external_nodes(source, nodes)
 
+    # -- roles: one decision for every protocol and mirror (bridge.roles) --------------------
+
+    def authorize(self, client_id: int, action: Action | str, name: str) -> str | None:
+        """May client `client_id` do `action` (`schemas.roles_config.Action`: "subscribe",
+        "publish", "call_service", ...) on `name`? The refusal text (naming action, name and
+        role) or None. Another protocol asks before it acts for its client, as the core does
+        before every rosbridge op; a mirror acting for a client asks with that client's id."""
+        return self._core.authorize(client_id, action, name)
+
+    def connect_client(self, receive: Receiver, peer: str = "", token: str | None = None) -> int:
+        """A client of another protocol (Foxglove) that the core treats like a websocket
+        client: it must authenticate (with `token`, checked now; a bad one is closed) and
+        gets its role's rights. What the core sends it goes to `receive`."""
+        client_id = self._core.connect(peer)
+        self._edge.internal_clients[client_id] = receive
+        self._apply(self._core.admit(client_id, time.time_ns(), token))
+        return client_id
+
+    def set_audit(self, sink: AuditSink) -> None:
+        """Where the policy writes its audit entries (`bridge.audit`, `--audit-log`)."""
+        self._core.set_audit(sink)
+
+    def principal_counters(self) -> Mapping[str, PrincipalCounters]:
+        """Messages, bytes, refusals and drops per principal (for /metrics)."""
+        return self._core.state.policy.counters
+
+    def may_read_metrics(self, authorization: str | None) -> bool:
+        """Whether an HTTP request with this `Authorization` header may read /metrics."""
+        return self._core.may_read_metrics(bearer_token(authorization), time.time_ns())
+
     # -- gateways between graphs --------------------------------------------------------------
 
     def claim_nodes(self, source: str, nodes: Iterable[str]) -> None:
@@ -213,4 +279,12 @@ class PluginHost:
             self._edge.apply(effects)
 
 
-__all__ = ["Edge", "GraphView", "Plugin", "PluginHost", "Receiver"]
+__all__ = [
+    "Edge",
+    "GraphView",
+    "Plugin",
+    "PluginHost",
+    "ProtocolConnection",
+    "ProtocolFactory",
+    "Receiver",
+]

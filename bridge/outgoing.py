@@ -100,13 +100,20 @@ class TopicMessage:
                 self._frames[key] = cached
         return cached
 
+    def serialized(self) -> bytes:
+        """The CDR bytes (with their 4-byte header), computed once and shared by cbor-raw and
+        every other CDR speaker (thread-safe)."""
+        if self.cdr is None:
+            with self._lock:
+                if self.cdr is None:
+                    self.cdr = to_cdr(self.registry, self.type_name, self.msg)
+        return self.cdr
+
     def _encode(self, encoding: str, topic: str) -> WireFrame:
         if encoding == CBOR:
             return WireFrame(publish_cbor(topic, self.msg), text=False)
         if encoding == CBOR_RAW:
-            if self.cdr is None:
-                self.cdr = to_cdr(self.registry, self.type_name, self.msg)
-            return WireFrame(publish_cbor_raw(topic, self.cdr, self.stamp_ns), text=False)
+            return WireFrame(publish_cbor_raw(topic, self.serialized(), self.stamp_ns), text=False)
         if encoding == PNG:
             return WireFrame(encode_png_op(self.frame(JSON, topic).data), text=True)
         return WireFrame(publish_json(topic, self.msg), text=True)
@@ -158,7 +165,26 @@ class ControlMessage:
         return WireFrame(codec_json.dumps(self.payload), text=True)
 
 
-Outgoing = Delivery | ControlMessage
+@dataclass(frozen=True, slots=True)
+class RawFrame:
+    """A frame built by another protocol's translator (Foxglove): sent as it is, never dropped
+    unless given a drop key."""
+
+    wire: WireFrame
+
+    @property
+    def size_hint(self) -> int:
+        return len(self.wire.data)
+
+    @property
+    def message_id(self) -> Any:
+        return None
+
+    def frame(self) -> WireFrame:
+        return self.wire
+
+
+Outgoing = Delivery | ControlMessage | RawFrame
 
 
 def render(item: Outgoing, fragment_size: int | None, fallback_id: str) -> list[WireFrame]:

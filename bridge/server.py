@@ -14,22 +14,27 @@ from __future__ import annotations
 import asyncio
 import logging
 import time
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from concurrent.futures import ThreadPoolExecutor
+from typing import TYPE_CHECKING
 
 from websockets.asyncio.server import Server, ServerConnection, serve
 from websockets.exceptions import ConnectionClosed
 from websockets.http11 import Request, Response
+from websockets.typing import Subprotocol
 
-from bridge.access import HandshakePolicy, tls_context
+from bridge.access import HandshakePolicy, handshake_token, tls_context
 from bridge.config import BridgeConfig
 from bridge.core import BridgeCore
-from bridge.effects import Close, DeadlineKey, Effect, Schedule, Send
+from bridge.effects import Close, DeadlineKey, Effect, Hold, Schedule, Send
 from bridge.http import HttpRoutes
 from bridge.intake import Intake
 from bridge.link import WRITE_HIGH_WATER, ClientLink, Delivered
 from bridge.outgoing import Delivery
 from bridge.reply_budget import POLICY_VIOLATION
+
+if TYPE_CHECKING:
+    from bridge.host import ProtocolConnection, ProtocolFactory
 
 logger = logging.getLogger("bridge.server")
 
@@ -74,6 +79,12 @@ class BridgeServer:
         self.internal_clients: dict[int, Callable[[Send], None]] = {}
         self.delivered: Delivered = no_observer  # told when a delivery's frames are written
         self.clients_changed: list[Callable[[], None]] = []  # after a client comes or goes
+        self._holds: dict[int, int] = {}  # client id -> read nothing of it before (ns)
+
+        # Other protocols by websocket subprotocol (Foxglove's); a client offering none of
+        # them speaks rosbridge v2. Their connections translate what the core sends them.
+        self.protocols: dict[str, ProtocolFactory] = {}
+        self._translators: dict[int, Callable[[Send], list[Send]]] = {}
 
     @property
     def port(self) -> int:
@@ -91,6 +102,7 @@ class BridgeServer:
             write_limit=WRITE_HIGH_WATER,
             close_timeout=CLOSE_TIMEOUT_S,
             process_request=self._process_request,
+            select_subprotocol=self._select_subprotocol,
             ssl=tls_context(self.config),
         )
 
@@ -125,6 +137,12 @@ class BridgeServer:
                 return connection.respond(*refusal)
         return self.http(connection, request)
 
+    def _select_subprotocol(
+        self, connection: ServerConnection, offered: Sequence[Subprotocol]
+    ) -> Subprotocol | None:
+        """The first offered subprotocol a plug-in speaks; None (rosbridge v2) otherwise."""
+        return next((name for name in offered if name in self.protocols), None)
+
     # -- one connection ----------------------------------------------------------------------
 
     async def _handle(self, ws: ServerConnection) -> None:
@@ -150,8 +168,17 @@ class BridgeServer:
             self.apply(effects, paced)
 
         intake = Intake(client_id, self.core, self._pool, apply)
+        factory = self.protocols.get(ws.subprotocol) if ws.subprotocol else None
+        other = factory(client_id, ws.subprotocol or "") if factory is not None else None
+        if other is not None:
+            self._translators[client_id] = other.outgoing
         self._tell_clients_changed()
+        token = handshake_token(ws.request) if ws.request is not None else None
+        self.apply(self.core.admit(client_id, time.time_ns(), token))
         try:
+            if other is not None:
+                await self._read_other(ws, other)
+                return
             busy_s = 0.0  # time spent handling this client's frames since it last yielded
             async for data in ws:
                 started = time.perf_counter()
@@ -163,17 +190,41 @@ class BridgeServer:
                     or intake.in_flight > INTAKE_FRAMES
                     or intake.pending_bytes > INTAKE_BYTES
                     or link.queue.answers_waiting > ANSWER_BACKLOG
+                    or client_id in self._holds
                 ):
                     await self._between_turns(link, intake, paced)
+                    await self._held(client_id)
                     busy_s = 0.0
         except ConnectionClosed as exc:
             logger.info("client %d closed: %s", client_id, exc)
         finally:
             intake.closed = True
+            if other is not None:
+                other.close()
+                del self._translators[client_id]
             del self.links[client_id]
+            self._holds.pop(client_id, None)
             link.close()
             self.apply(self.core.disconnect(client_id, time.time_ns()))
             self._tell_clients_changed()
+
+    async def _held(self, client_id: int) -> None:
+        """A client past its quota (`Hold`): wait until it has room, reading nothing of it."""
+        until_ns = self._holds.pop(client_id, None)
+        if until_ns is not None:
+            await asyncio.sleep(max(0.0, (until_ns - time.time_ns()) / 1e9))
+
+    @staticmethod
+    async def _read_other(ws: ServerConnection, other: ProtocolConnection) -> None:
+        """Frames of another protocol's client, with the same fair turns as rosbridge's."""
+        busy_s = 0.0
+        async for data in ws:
+            started = time.perf_counter()
+            other.receive(data)
+            busy_s += time.perf_counter() - started
+            if busy_s > TURN_S:
+                await asyncio.sleep(0)
+                busy_s = 0.0
 
     def _tell_clients_changed(self) -> None:
         for callback in self.clients_changed:
@@ -200,10 +251,18 @@ class BridgeServer:
         for effect in effects:
             if type(effect) is Send:
                 link = self.links.get(effect.client_id)
-                if link is not None and link.offer(effect) and paced is not None:
+                translate = self._translators.get(effect.client_id)
+                if translate is not None and link is not None:
+                    for send in translate(effect):
+                        if link.offer(send) and paced is not None:
+                            paced.add(link)
+                elif link is not None and link.offer(effect) and paced is not None:
                     paced.add(link)
                 elif link is None and effect.client_id in self.internal_clients:
                     self.internal_clients[effect.client_id](effect)
+            elif isinstance(effect, Hold):
+                if effect.client_id in self.links:  # an in-process client has no reads to hold
+                    self._holds[effect.client_id] = effect.until_ns
             elif isinstance(effect, Schedule):
                 self._schedule(effect.key, effect.at_ns)
             elif isinstance(effect, Close):

@@ -17,6 +17,7 @@ from typing import Annotated, Literal
 from pydantic import BaseModel, ConfigDict, Field, SecretStr, model_validator
 
 from schemas.options import MIB, Option
+from schemas.roles_config import RolesConfig, load_roles
 from schemas.rosauth import read_secret
 
 MIN_SEND_BUFFER = 64 * 1024  # below one socket buffer's worth, healthy readers would drop
@@ -140,6 +141,18 @@ class BridgeConfig(BaseModel):
             "--interfaces",
             TYPES,
             "extra folder of <pkg>/{msg,srv,action}/ definitions (repeatable)",
+            "DIR",
+            many="append",
+            exists="dir",
+        ),
+    ] = ()
+    # Foxglove clients' fetchAsset: files under these folders only (bridge/foxglove/assets.py).
+    asset_dirs: Annotated[
+        tuple[Path, ...],
+        Option(
+            "--asset-dir",
+            NETWORK,
+            "serve this folder's meshes to Foxglove clients as package://<name>/... (repeatable)",
             "DIR",
             many="append",
             exists="dir",
@@ -353,11 +366,62 @@ class BridgeConfig(BaseModel):
         ),
     ] = Field(default=32 * MIB, gt=0)
 
+    # Roles, tokens and audit (bridge.roles, docs/bridge.md "Roles and tokens"): who may
+    # do what, read from a TOML file (schemas.roles_config); None = everyone may do everything.
+    roles: Annotated[
+        RolesConfig | None,
+        Option(
+            "--roles",
+            SECURITY,
+            "roles file (TOML): what each role may subscribe, publish, call, advertise, and its "
+            "quotas; clients get a role from their token (config/roles.example.toml)",
+            "FILE",
+            exists="file",
+            read=load_roles,
+        ),
+    ] = None
+    # Seconds a client of a bridge that needs authentication may stay without authenticating.
+    auth_grace_s: Annotated[
+        float,
+        Option(
+            "--auth-grace",
+            SECURITY,
+            "seconds a client may stay connected without authenticating (with --auth-secret-file)",
+            "S",
+        ),
+    ] = Field(default=5.0, gt=0)
+    # JSON lines: audited publishes, calls, goals, parameter changes, refusals; rotated by size.
+    audit_log: Annotated[
+        Path | None,
+        Option(
+            "--audit-log",
+            SECURITY,
+            "append an audit trail (JSON lines, rotated by size) of calls, goals, parameter "
+            "changes, publishes on audited topics and refusals to this file",
+            "FILE",
+        ),
+    ] = None
+
     @model_validator(mode="after")
     def _tls_pair(self) -> BridgeConfig:
         if (self.certfile is None) != (self.keyfile is None):
             raise ValueError("certfile and keyfile (--certfile, --keyfile) go together")
         return self
+
+    @model_validator(mode="after")
+    def _roles_reachable(self) -> BridgeConfig:
+        roles = self.roles
+        if roles is not None and self.auth_secret is None and roles.unauthenticated_role is None:
+            raise ValueError(
+                "roles (--roles) without --auth-secret-file: nobody could authenticate; "
+                "give a secret, or name an unauthenticated_role in the roles file"
+            )
+        return self
+
+    def needs_auth(self) -> bool:
+        """Whether a websocket client must authenticate before anything else."""
+        unauthenticated = self.roles.unauthenticated_role if self.roles is not None else None
+        return self.auth_secret is not None and unauthenticated is None
 
     def action_patterns(self) -> tuple[str, ...]:
         """The globs actions must match: `actions_glob`, else `services_glob`."""

@@ -79,6 +79,12 @@ def build_parser() -> argparse.ArgumentParser:
         f"the bridge's own: {', '.join(BRIDGE_OWNED)})",
     )
     parser.add_argument(
+        "--stay",
+        action="store_true",
+        help="after the last message, stay (paused at the end) so that a Foxglove client "
+        "can seek back, until Ctrl-C/SIGTERM",
+    )
+    parser.add_argument(
         "--stamps",
         choices=STAMP_MODES,
         default="shift",
@@ -123,6 +129,7 @@ def main(argv: list[str] | None = None) -> int:
         loop=args.loop,
         stamps=args.stamps,
         connect_timeout_s=args.connect_timeout,
+        stay=args.stay,
     )
 
     async def serve(stop: asyncio.Event) -> None:

@@ -53,9 +53,10 @@ def _message(schema: Schema, channel: Channel, message: Message) -> RecordedMess
 
 
 def read_recording(
-    path: Path, wanted: Callable[[str], bool]
+    path: Path, wanted: Callable[[str], bool], start_ns: int | None = None
 ) -> Generator[RecordedMessage, None, None]:
-    """The ROS 2 (``ros2msg``/``cdr``) messages of the topics ``wanted`` takes, in time order.
+    """The ROS 2 (``ros2msg``/``cdr``) messages of the topics ``wanted`` takes, in time order,
+    from log time ``start_ns`` on (a seek: the index finds the first chunk that holds it).
 
     Raises :class:`McapError` if ``path`` is not an MCAP file at all.
     """
@@ -71,12 +72,34 @@ def read_recording(
                 for c in summary.channels.values()
                 if wanted(c.topic) and is_ros2(summary.schemas.get(c.schema_id), c)
             ]
-            for schema, channel, message in reader.iter_messages(topics=topics):
+            for schema, channel, message in reader.iter_messages(
+                topics=topics, start_time=start_ns
+            ):
                 assert schema is not None  # is_ros2 above
                 yield _message(schema, channel, message)
             return
         stream.seek(0)
-        yield from _stream(NonSeekingReader(stream), wanted, path)
+        for recorded in _stream(NonSeekingReader(stream), wanted, path):
+            if start_ns is None or recorded.log_time_ns >= start_ns:
+                yield recorded
+
+
+def recording_window(path: Path, wanted: Callable[[str], bool]) -> tuple[int, int]:
+    """The first and last log time (ns) of the messages ``read_recording`` gives; (0, 0)
+    when there are none. From the summary's statistics when the file has them."""
+    with open(path, "rb") as stream:
+        try:
+            statistics = SeekingReader(stream).get_summary()
+        except Exception:  # a truncated file: read it through below
+            statistics = None
+    stats = statistics.statistics if statistics is not None else None
+    if stats is not None and stats.message_count:
+        return stats.message_start_time, stats.message_end_time
+    first = last = None
+    for recorded in read_recording(path, wanted):
+        first = recorded.log_time_ns if first is None else first
+        last = recorded.log_time_ns
+    return (first or 0, last or 0)
 
 
 def _stream(

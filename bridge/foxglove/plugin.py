@@ -1,0 +1,211 @@
+"""The Foxglove plug-in: Foxglove WebSocket clients on the bridge's own port (the shell).
+
+`FoxglovePlugin` registers the subprotocols with the host, so the edge's handshake gives a
+client offering `foxglove.websocket.v1` (or the SDK's `foxglove.sdk.v1`) a
+`FoxgloveConnection` instead of rosbridge's reader. Everything a client does goes through the
+same handshake (TLS, Origin allow-list, client limit), the same core calls and the same send
+queue as a rosbridge client. A watcher keeps the shared channel and service tables in step
+with the graph and tells clients what changed: channels, services, connection graph,
+parameters, and the player's state and time (`bridge.foxglove.playback`).
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+from typing import Any
+
+from bridge.effects import Send
+from bridge.foxglove import wire
+from bridge.foxglove.assets import AssetDirectory
+from bridge.foxglove.channels import ChannelTable, published_topics
+from bridge.foxglove.graph_view import connection_graph, graph_changes
+from bridge.foxglove.playback import STATE_TOPIC, PlaybackWatch
+from bridge.foxglove.session import FoxgloveSession, Permit, allow_all
+from bridge.host import PluginHost
+from bridge.problems import ProblemLog
+from schemas.safety import safe_text
+
+logger = logging.getLogger("bridge.foxglove")
+
+WATCH_S = 0.1  # how often the graph, parameters and player are compared with what clients know
+SERVER_NAME = "riverbridge"
+GRAPH_OPS = frozenset({"advertise", "unadvertise", "subscribe", "unsubscribe"})
+
+
+class FoxglovePlugin:
+    """Foxglove clients of one bridge: the shared tables, the watcher, the connections."""
+
+    def __init__(self, host: PluginHost, permit: Permit = allow_all) -> None:
+        self.host = host
+        self.permit = permit
+        self.table = ChannelTable(host.registry)
+        self.assets = AssetDirectory(host.config.asset_dirs)
+        self.connections: dict[int, FoxgloveConnection] = {}
+        self.playback = PlaybackWatch(host)
+        self.graph: dict[str, Any] = connection_graph(host.graph.topics, host.graph.services)
+        self._params: dict[str, str] = {}
+
+    async def start(self) -> None:
+        self.reconcile()
+        self.playback.start(self.broadcast)
+        self.host.serve_subprotocols(wire.SUBPROTOCOLS, self._connect)
+        self.host.spawn(self._watch(), "foxglove watcher")
+
+    async def stop(self) -> None:
+        self.playback.stop()
+
+    def _connect(self, client_id: int, subprotocol: str) -> FoxgloveConnection:
+        self.reconcile()
+        connection = FoxgloveConnection(self, client_id, subprotocol == wire.SDK_V1)
+        self.connections[client_id] = connection
+        return connection
+
+    async def _watch(self) -> None:
+        while True:
+            await asyncio.sleep(WATCH_S)
+            self.reconcile()
+
+    def reconcile(self) -> None:
+        """Tell clients what changed since the last look (channels first: a client may
+        subscribe to a new channel as soon as it is advertised)."""
+        published = published_topics(self.host.graph.topics.values())
+        if STATE_TOPIC not in published:
+            self.playback.forget()
+        topics = self.table.reconcile_topics(published)
+        provided = {e.name: e.type_name for e in self.host.graph.services.values() if e.type_name}
+        services = self.table.reconcile_services({**self.host.answered_services(), **provided})
+        if topics.removed:
+            self.broadcast(wire.json_frame("unadvertise", channelIds=topics.removed))
+        if topics.added:
+            self.broadcast(wire.json_frame("advertise", channels=topics.added))
+        if services.removed:
+            self.broadcast(wire.json_frame("unadvertiseServices", serviceIds=services.removed))
+        if services.added:
+            self.broadcast(wire.json_frame("advertiseServices", services=services.added))
+        graph = connection_graph(self.host.graph.topics, self.host.graph.services)
+        update = graph_changes(self.graph, graph)
+        self.graph = graph
+        if update is not None:
+            self.broadcast(update, lambda c: c.session.graph_subscribed)
+        self._tell_parameters()
+
+    def _tell_parameters(self) -> None:
+        params = dict(self.host.parameters())
+        if params == self._params:
+            return
+        changed = [n for n in params.keys() | self._params if params.get(n) != self._params.get(n)]
+        self._params = params
+        for connection in list(self.connections.values()):
+            names = [n for n in changed if n in connection.session.parameter_names]
+            if names:
+                connection.send(connection.session.parameter_values(names, params, None))
+
+    def broadcast(self, data: bytes, wanted: Any = None, drop_key: str | None = None) -> None:
+        for connection in list(self.connections.values()):
+            if wanted is None or wanted(connection):
+                connection.send(data, drop_key)
+
+    def server_info(self, playback_control: bool) -> bytes:
+        capabilities = [
+            "clientPublish",
+            "parameters",
+            "parametersSubscribe",
+            "services",
+            "connectionGraph",
+            "assets",
+        ]
+        fields: dict[str, Any] = {
+            "name": SERVER_NAME,
+            "capabilities": capabilities,
+            "supportedEncodings": ["cdr", "json"],
+            "metadata": {"ROS_DISTRO": self.host.config.distro},
+        }
+        window = self.playback.window()
+        if window is not None:
+            capabilities += ["time", "playbackControl"] if playback_control else ["time"]
+            fields["dataStartTime"], fields["dataEndTime"] = (wire.stamp(ns) for ns in window)
+        return wire.json_frame("serverInfo", **fields)
+
+
+class FoxgloveConnection:
+    """One Foxglove client: runs its session's ops as core calls, sends its frames."""
+
+    def __init__(self, plugin: FoxglovePlugin, client_id: int, playback_control: bool) -> None:
+        self.plugin = plugin
+        # Playback control (PlaybackState frames) is the SDK's foxglove.sdk.v1 only: a
+        # foxglove.websocket.v1 client does not know its opcode.
+        self.playback_control = playback_control
+        self.host = plugin.host
+        self.client_id = client_id
+        self.session = FoxgloveSession(client_id, plugin.table, self.host.registry, self.permit)
+        self.session.clock = plugin.playback.message_time
+        session = self.host.clients().get(client_id)
+        self.node = session.node if session is not None else f"client {client_id}"
+        self._problems = ProblemLog()  # bad input: logged per line up to a rate, then counted
+        # Problems with its ops come back as rosbridge `status`, turned into Foxglove ones.
+        self.host.send_op(client_id, {"op": "set_level", "level": "warning"})
+        self.send(plugin.server_info(playback_control))
+        if plugin.table.by_id:
+            self.send(wire.json_frame("advertise", channels=plugin.table.channel_adverts()))
+        if plugin.table.services_by_id:
+            services = plugin.table.service_adverts()
+            self.send(wire.json_frame("advertiseServices", services=services))
+
+    def permit(self, action: str, name: str) -> str | None:
+        """Whether this client may do `action` on `name` (None: yes, else why not). With an
+        auth secret nothing is allowed: Foxglove's protocol has no rosauth `auth` op."""
+        session = self.host.clients().get(self.client_id)
+        if session is None or not session.authenticated:
+            return "not authenticated: this bridge needs rosauth, which Foxglove cannot send"
+        return self.plugin.permit(action, name)
+
+    def send(self, data: bytes, drop_key: str | None = None) -> None:
+        text = data[:1] == b"{"
+        self.host.deliver(self.session.frame(data, text=text, drop_key=drop_key))
+
+    def receive(self, data: bytes | str) -> None:
+        reply = self.session.receive(data)
+        for problem in reply.problems:
+            self._log_problem(reply.op, problem)
+        for frame in reply.frames:
+            self.send(frame)
+        for op in reply.ops:
+            self.host.send_op(self.client_id, op)
+        if reply.parameters_after is not None:
+            names, request_id = reply.parameters_after
+            self.send(self.session.parameter_values(names, self.host.parameters(), request_id))
+        if reply.asset is not None:
+            self.host.spawn(self._fetch(reply.asset), "foxglove fetchAsset")
+        if any(op["op"] in GRAPH_OPS for op in reply.ops):
+            self.plugin.reconcile()  # its advertisements are channels for the others at once
+        if self.session.graph_subscribed and not self.session.graph_sent:
+            self.session.graph_sent = True
+            self.send(graph_changes({}, self.plugin.graph) or b"")
+
+    async def _fetch(self, request: wire.FetchAsset) -> None:
+        """Read the asset on a worker thread (a terrain mesh may be megabytes)."""
+        self.send(await asyncio.to_thread(self.plugin.assets.answer, request))
+
+    def outgoing(self, send: Send) -> list[Send]:
+        return self.session.outgoing(send)
+
+    def _log_problem(self, op: str, problem: str) -> None:
+        """One line per problem naming client, op and problem; past 20 in 10 s, a summary."""
+        now_ns = self.host.now_ns()
+        summary = self._problems.expired_summary(now_ns, self.node, "Foxglove problems")
+        if summary is not None:
+            logger.warning("%s", summary)
+        if self._problems.note(now_ns)[0]:
+            logger.warning("[%s] Foxglove op=%s: %s", self.node, safe_text(op, 60), problem)
+
+    def close(self) -> None:
+        self.plugin.connections.pop(self.client_id, None)
+        summary = self._problems.summary(self.node, self.host.now_ns(), "Foxglove problems")
+        if summary is not None:
+            logger.warning("%s", summary)
+
+
+def plugin(host: PluginHost) -> FoxglovePlugin:
+    """The plug-in `bridge.compose.plugin_table` builds."""
+    return FoxglovePlugin(host)

@@ -1,0 +1,147 @@
+"""Foxglove clients go through the rosbridge side's door and send queue: TLS, the Origin
+allow-list, authentication, and a bounded queue that drops a non-reader's oldest messages,
+while a rosbridge client on the same port reads everything."""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import ssl
+from pathlib import Path
+from typing import Any
+
+import orjson
+import pytest
+import websockets
+from pydantic import SecretStr
+from websockets.exceptions import InvalidStatus
+
+from bridge.compose import run_bridge
+from bridge.config import BridgeConfig
+from tests.tls_certificates import make_certificate
+
+pytestmark = pytest.mark.timeout(60)
+
+FOXGLOVE = "foxglove.websocket.v1"
+
+
+async def next_json(ws: Any, op: str) -> dict[str, Any]:
+    """The next text frame whose op is `op` (skipping others)."""
+    while True:
+        data = await asyncio.wait_for(ws.recv(), 10)
+        if isinstance(data, str) and (message := json.loads(data))["op"] == op:
+            return message
+
+
+async def test_foxglove_over_tls(tmp_path: Path) -> None:
+    pair = make_certificate(tmp_path)
+    config = BridgeConfig(port=0, certfile=pair.certfile, keyfile=pair.keyfile)
+    trust = ssl.create_default_context(cafile=str(pair.certfile))
+    async with (
+        run_bridge(config) as bridge,
+        websockets.connect(bridge.url, subprotocols=[FOXGLOVE], ssl=trust) as ws,
+    ):
+        assert bridge.url.startswith("wss://")
+        assert ws.subprotocol == FOXGLOVE
+        assert (await next_json(ws, "serverInfo"))["name"] == "riverbridge"
+
+
+async def test_a_refused_origin_is_refused_for_foxglove_too() -> None:
+    config = BridgeConfig(port=0, allowed_origins=("https://app.example",))
+    async with run_bridge(config) as bridge:
+        with pytest.raises(InvalidStatus) as refused:
+            async with websockets.connect(
+                bridge.url, subprotocols=[FOXGLOVE], origin="https://evil.example"
+            ):
+                pass
+        assert refused.value.response.status_code == 403
+        async with websockets.connect(
+            bridge.url, subprotocols=[FOXGLOVE], origin="https://app.example"
+        ) as ws:
+            assert ws.subprotocol == FOXGLOVE
+
+
+async def test_with_an_auth_secret_a_foxglove_client_may_do_nothing() -> None:
+    """Foxglove's protocol has no rosauth op: until roles give it a way in, it is refused."""
+    config = BridgeConfig(port=0, auth_secret=SecretStr("s3cret"))
+    async with (
+        run_bridge(config) as bridge,
+        websockets.connect(bridge.url, subprotocols=[FOXGLOVE]) as ws,
+    ):
+        channels = (await next_json(ws, "advertise"))["channels"]
+        rosout = next(c for c in channels if c["topic"] == "/rosout")
+        request = {"op": "subscribe", "subscriptions": [{"id": 1, "channelId": rosout["id"]}]}
+        await ws.send(orjson.dumps(request).decode())
+        status = await next_json(ws, "status")
+        assert status["level"] == 2 and "not authenticated" in status["message"]
+
+
+async def test_a_foxglove_client_that_stops_reading_loses_its_oldest(tmp_path: Path) -> None:
+    config = BridgeConfig(port=0, send_buffer_bytes=4 * 1024 * 1024)
+    payload = {"data": "x" * 100_000}
+    async with (
+        run_bridge(config) as bridge,
+        websockets.connect(bridge.url, max_size=None) as publisher,
+        websockets.connect(bridge.url, max_size=None) as reader,
+        websockets.connect(bridge.url, subprotocols=[FOXGLOVE], max_queue=1) as stalled,
+    ):
+        topic = {"topic": "/bulk", "type": "std_msgs/msg/String"}
+        await publisher.send(json.dumps({"op": "advertise", **topic}))
+        await reader.send(json.dumps({"op": "subscribe", **topic, "id": "r"}))
+        channel = await wait_for_channel(stalled, "/bulk")
+        request = {"op": "subscribe", "subscriptions": [{"id": 1, "channelId": channel}]}
+        await stalled.send(orjson.dumps(request).decode())
+        await asyncio.sleep(0.2)  # (subscriptions are in place once both ops were handled)
+        count = 300
+        received = 0
+
+        async def read_all() -> None:
+            nonlocal received
+            while received < count:
+                message = json.loads(await reader.recv())
+                received += message.get("op") == "publish"
+
+        reading = asyncio.create_task(read_all())
+        for _ in range(count):
+            await publisher.send(json.dumps({"op": "publish", "topic": "/bulk", "msg": payload}))
+        await asyncio.wait_for(reading, 30)
+        stats = bridge.server.stats()
+        foxglove_id = max(stats)
+        assert received == count  # the reader lost nothing
+        assert stats[foxglove_id]["dropped"].get("/bulk", 0) > 0, stats[foxglove_id]
+
+
+async def wait_for_channel(ws: Any, topic: str) -> int:
+    """The channel id of `topic` once it is advertised."""
+    while True:
+        channels = (await next_json(ws, "advertise"))["channels"]
+        found = [c["id"] for c in channels if c["topic"] == topic]
+        if found:
+            return int(found[0])
+
+
+async def test_hostile_frames_get_a_status_and_one_log_line_each(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    hostile: list[str | bytes] = [
+        "{not json",
+        '{"op": "frobnicate"}',
+        b"\x09\x00",
+        b"\x01\x05\x00\x00\x00cdr",
+        '{"op": "subscribe", "subscriptions": [{"id": 1, "channelId": 424242}]}',
+    ]
+    async with (
+        run_bridge(BridgeConfig(port=0)) as bridge,
+        websockets.connect(bridge.url, subprotocols=[FOXGLOVE]) as ws,
+    ):
+        for frame in hostile:
+            await ws.send(frame)
+            status = await next_json(ws, "status")
+            assert status["level"] == 2
+        await ws.send('{"op": "subscribeConnectionGraph"}')  # still served
+        assert "publishedTopics" in await next_json(ws, "connectionGraphUpdate")
+    lines = [r.getMessage() for r in caplog.records if "Foxglove op=" in r.getMessage()]
+    assert len(lines) == len(hostile), lines
+    assert lines[1].endswith("Foxglove op=?: unknown op: 'frobnicate'")
+    assert "op=binary opcode 1: message on unknown client channel 5" in lines[3]
+    assert all(line.startswith("[/rosbridge_client_") for line in lines)
