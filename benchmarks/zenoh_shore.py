@@ -30,8 +30,10 @@ import os
 import random
 import statistics
 import sys
+import tempfile
 import time
 from collections.abc import Iterator
+from pathlib import Path
 
 import numpy as np
 import websockets
@@ -160,9 +162,21 @@ def read_zenoh(endpoint: str, domain: int, seconds: float) -> dict:
 
 
 @contextlib.contextmanager
-def vessel_bridge(domain: int, zenoh_port: int) -> Iterator[int]:
+def vessel_bridge(domain: int, zenoh_port: int, sndbuf_bytes: int) -> Iterator[int]:
     argv = [sys.executable, "-m", "bridge", "--port", "0", "--log-level", "warning"]
     argv += ["--zenoh", "--domain", str(domain), "--zenoh-listen", f"tcp/127.0.0.1:{zenoh_port}"]
+    config = Path(tempfile.mkdtemp()) / "vessel_zenoh.json5"
+    if sndbuf_bytes:  # the user's way to bound what waits in the kernel: --zenoh-config
+        config.write_text(
+            json.dumps(
+                {
+                    "mode": "peer",
+                    "scouting": {"multicast": {"enabled": False}},
+                    "transport": {"link": {"tcp": {"so_sndbuf": sndbuf_bytes}}},
+                }
+            )
+        )
+        argv += ["--zenoh-config", str(config)]
     child = Running(argv, env=repo_env(TUNED_MALLOC))
     try:
         yield int(child.wait_for_line(LISTENING).group("port"))
@@ -235,9 +249,9 @@ async def drive(args: argparse.Namespace) -> None:
     print(
         f"{args.scan_points:,}-point scan ({scan_bytes:,} B) at {SCAN_HZ:g} Hz + Imu at "
         f"{IMU_HZ:g} Hz from the vessel; {args.seconds:g} s per case after {WARMUP_S:g} s; "
-        f"{load()}"
+        f"Zenoh send buffer {args.zenoh_sndbuf or 'autotuned'}; {load()}"
     )
-    with vessel_bridge(domain, zenoh_port) as ws_port:
+    with vessel_bridge(domain, zenoh_port, args.zenoh_sndbuf) as ws_port:
         for profile in args.profiles.split(","):
             print(f"link {profile}: {profile_named(profile)}")
             medians: dict[str, list[float]] = {}
@@ -269,6 +283,13 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seconds", type=float, default=15.0)
     parser.add_argument("--rounds", type=int, default=2)
     parser.add_argument("--scan-points", type=int, default=SCAN_POINTS)
+    parser.add_argument(
+        "--zenoh-sndbuf",
+        type=int,
+        default=0,
+        help="the vessel bridge's Zenoh TCP send buffer in bytes, through --zenoh-config "
+        "(default 0: the kernel's autotuning)",
+    )
     parser.add_argument("--role", choices=("publish", "websocket", "zenoh"), help=argparse.SUPPRESS)
     parser.add_argument("--url", help=argparse.SUPPRESS)
     parser.add_argument("--endpoint", help=argparse.SUPPRESS)

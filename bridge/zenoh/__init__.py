@@ -2,9 +2,10 @@
 
 Pure parts: `keys` (data key expressions, type hashes per distro), `attachment` (the 33-byte
 attachment), `liveliness` (tokens and their QoS element), `graph` (the graph cache built from
-tokens), `problems` (rate-limited lines for bad input). Zenoh's shell: `session` (configuration,
-opening), `node` (identity and tokens), `topics`, `services`; `mirror.ZenohMirror` ties them to
-the bridge. Only `--zenoh` imports the shell (and `eclipse-zenoh`).
+tokens), `problems` (rate-limited lines for bad input). Zenoh's shell: `session`
+(configuration, opening), `node` (identity and tokens), `topics`, `bulk`, `services`;
+`mirror.ZenohMirror` ties them to the bridge. Only `--zenoh` imports the shell (and
+`eclipse-zenoh`).
 """
 
 from __future__ import annotations

@@ -58,6 +58,7 @@ class ZenohMirror:
         self._injecting = False
         self._injected_nodes: set[str] = set()
         self._waiting_first: dict[str, TopicMessage] = {}
+        self._remote_topics: dict[str, RemoteTopic] = {}  # as of the last reconcile
         self._task: asyncio.Task[None] | None = None
         self._wake = asyncio.Event()
 
@@ -151,7 +152,7 @@ class ZenohMirror:
     def _publisher_node(self, arrival: Arrival) -> str:
         """The remote node that published `arrival`: the topic's one remote publisher, else a
         name made from the sample's source GID."""
-        topic = self.graph.topics().get(arrival.topic)
+        topic = self._remote_topics.get(arrival.topic)
         nodes = list(topic.publishers) if topic is not None else []
         if len(nodes) == 1 and nodes[0] not in self.local_nodes():
             return nodes[0]
@@ -184,7 +185,7 @@ class ZenohMirror:
     def reconcile(self) -> None:
         """Bring publishers, subscribers, services and the graph's remote half in step."""
         local = self.local_nodes()
-        remote_topics = self.graph.topics()
+        remote_topics = self._remote_topics = self.graph.topics()
         publishers, subscribers = self._wanted_topics(local, remote_topics)
         self.topics.sync(publishers, subscribers)
         for message in self._waiting_first.values():

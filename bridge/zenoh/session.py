@@ -36,7 +36,7 @@ def session_config(settings: ZenohSettings) -> zenoh.Config:
             config = zenoh.Config()
             config.insert_json5("mode", '"peer"')
             config.insert_json5("scouting/multicast/enabled", "false")
-        # Publication caches (transient local) order samples by timestamp, as rmw_zenoh's do.
+        # Publication caches (transient local) need timestamps, as rmw_zenoh's: always on.
         config.insert_json5("timestamping/enabled", "true")
         listen = settings.listen or (() if settings.config_file else DEFAULT_LISTEN)
         # Told where to listen, the bridge is the meeting point: it seeks no router then.

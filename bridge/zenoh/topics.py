@@ -1,6 +1,11 @@
 """Topics between the bridge and Zenoh: a publisher per topic clients publish, a subscriber per
 topic clients read, on rmw_zenoh's keys with its attachment and tokens.
 
+Small messages are put from the event loop with *drop* congestion control at Zenoh's `DATA`
+priority. A topic whose messages are large (over `BULK_BYTES`: a scan, an image) moves to
+`DATA_LOW` with *block*, its messages put by `BulkWriter`'s thread, newest first: Zenoh
+fragments them and serves its priority queues in order, so on a thin link an IMU sample waits
+behind one batch of a scan instead of the whole scan, and scans arrive whole.
 A transient-local publisher keeps its last `depth` samples in a publication cache (zenoh-ext's
 advanced publisher, as rmw_zenoh does); a transient-local subscriber asks late publishers'
 caches for their history. Samples are checked and decoded on Zenoh's thread; a bad one is
@@ -12,6 +17,7 @@ from __future__ import annotations
 import itertools
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import partial
 from typing import Any
 
 import zenoh
@@ -25,6 +31,7 @@ from bridge.zenoh.attachment import (
     decode_attachment,
     encode_attachment,
 )
+from bridge.zenoh.bulk import BulkWriter
 from bridge.zenoh.keys import KeyProblem, data_key, parse_data_key, type_hash
 from bridge.zenoh.liveliness import Endpoint, EntityKind
 from bridge.zenoh.node import Declared, ZenohNode
@@ -32,6 +39,8 @@ from bridge.zenoh.problems import ProblemLog
 from schemas.codec_cdr import from_cdr, to_cdr
 from schemas.registry import TypeRegistry
 from schemas.values import Message
+
+BULK_BYTES = 64 * 1024  # Zenoh's default batch: a larger message is sent in fragments
 
 
 @dataclass(frozen=True)
@@ -55,10 +64,12 @@ class Arrival:
 
 @dataclass
 class _Publisher:
+    key: str
     wanted: Wanted
     raw: Any  # zenoh.Publisher or zenoh.ext.AdvancedPublisher
     declared: Declared
     sequence: itertools.count[int]
+    bulk: bool = False  # moved to DATA_LOW after its first large message
 
 
 @dataclass
@@ -84,6 +95,7 @@ class ZenohTopics:
         self._problems = problems
         self.publishers: dict[str, _Publisher] = {}
         self.subscribers: dict[str, _Subscriber] = {}
+        self.bulk = BulkWriter()
 
     def sync(self, publishers: dict[str, Wanted], subscribers: dict[str, Wanted]) -> None:
         for topic in [t for t, p in self.publishers.items() if publishers.get(t) != p.wanted]:
@@ -104,23 +116,25 @@ class ZenohTopics:
 
     def _publisher(self, topic: str, wanted: Wanted) -> _Publisher:
         key, endpoint = self._endpoint(topic, wanted)
+        raw = self._declare_raw(key, wanted, bulk=False)
+        declared = self._node.declare(EntityKind.PUBLISHER, endpoint)
+        return _Publisher(key, wanted, raw, declared, itertools.count(1))
+
+    def _declare_raw(self, key: str, wanted: Wanted, bulk: bool) -> Any:
         session = self._node.session
-        congestion = (
-            zenoh.CongestionControl.BLOCK if wanted.qos.depth == 0 else zenoh.CongestionControl.DROP
-        )
-        raw: Any
+        priority = zenoh.Priority.DATA_LOW if bulk else zenoh.Priority.DATA
+        blocking = bulk or wanted.qos.depth == 0  # keep-all, or put from the bulk thread
+        congestion = zenoh.CongestionControl.BLOCK if blocking else zenoh.CongestionControl.DROP
         if wanted.qos.transient_local:
-            raw = zenoh.ext.declare_advanced_publisher(
+            return zenoh.ext.declare_advanced_publisher(
                 session,
                 key,
                 congestion_control=congestion,
+                priority=priority,
                 cache=zenoh.ext.CacheConfig(max_samples=max(wanted.qos.depth, 1)),
                 publisher_detection=True,
             )
-        else:
-            raw = session.declare_publisher(key, congestion_control=congestion)
-        declared = self._node.declare(EntityKind.PUBLISHER, endpoint)
-        return _Publisher(wanted, raw, declared, itertools.count(1))
+        return session.declare_publisher(key, congestion_control=congestion, priority=priority)
 
     def _subscriber(self, topic: str, wanted: Wanted) -> _Subscriber:
         key, endpoint = self._endpoint(topic, wanted)
@@ -153,11 +167,29 @@ class ZenohTopics:
         publisher = self.publishers.get(message.topic)
         if publisher is None or publisher.wanted.type_name != message.type_name:
             return False
+        sequence = next(publisher.sequence)
+        if publisher.bulk or message.size_hint > BULK_BYTES:
+            if not publisher.bulk:
+                self._to_bulk(publisher)
+            job = partial(self._put, publisher, message, sequence)
+            self.bulk.put(message.topic, job, message.size_hint)
+        else:
+            self._put(publisher, message, sequence)
+        return True
+
+    def _put(self, publisher: _Publisher, message: TopicMessage, sequence: int) -> None:
         if message.cdr is None:
             message.cdr = to_cdr(self._registry, message.type_name, message.msg)
-        attachment = Attachment(next(publisher.sequence), message.stamp_ns, publisher.declared.gid)
+        attachment = Attachment(sequence, message.stamp_ns, publisher.declared.gid)
         publisher.raw.put(message.cdr, attachment=encode_attachment(attachment))
-        return True
+
+    def _to_bulk(self, publisher: _Publisher) -> None:
+        """Re-declare the publisher at DATA_LOW with *block* (it is put from the bulk thread
+        from now on)."""
+        publisher.bulk = True
+        old = publisher.raw
+        publisher.raw = self._declare_raw(publisher.key, publisher.wanted, bulk=True)
+        old.undeclare()
 
     def _take(self, topic: str, wanted: Wanted, sample: zenoh.Sample) -> None:
         """Check and decode one sample (on Zenoh's thread); deliver it or say why not."""
@@ -184,6 +216,7 @@ class ZenohTopics:
         self._deliver(Arrival(topic, wanted.type_name, msg, cdr, gid.source_gid))
 
     def close(self) -> None:
+        self.bulk.close()
         self.sync({}, {})
 
 

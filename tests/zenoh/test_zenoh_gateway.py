@@ -3,7 +3,7 @@
 Bridge A is on both (DDS domain + Zenoh); bridge B only on DDS, standing in for a ROS 2 node
 there; the Zenoh side is the independent participant (tests/zenoh/zenoh_peer.py). Messages
 cross each way exactly once, in order, and never come back; a service a client of B provides
-on DDS is called from Zenoh through A.
+on DDS is called from Zenoh through A, and one the Zenoh participant provides from B.
 """
 
 from __future__ import annotations
@@ -16,6 +16,7 @@ import pytest
 from bridge.compose import run_bridge
 from bridge.config import BridgeConfig
 from clients import RosbridgeClient
+from clients.errors import ServiceError
 from tests.receiving import drain
 from tests.zenoh.conftest import run_peer
 
@@ -58,12 +59,26 @@ async def test_dds_and_zenoh_exchange_messages_once_and_a_service(
 
         talking = asyncio.create_task(talk())
         steering = asyncio.create_task(run_peer(zenoh_endpoint, zenoh_domain, "wrench", "60", "10"))
+        serving = asyncio.create_task(
+            run_peer(zenoh_endpoint, zenoh_domain, "serve", "/zgate", "60")
+        )
         try:
             taken = await run_peer(zenoh_endpoint, zenoh_domain, "take", "/chatter", "20", "60")
             forces = await numbered_forces(wrenches, count=20, timeout_s=60.0)
             called = await run_peer(zenoh_endpoint, zenoh_domain, "call", "/lock_gate", "30")
+
+            async def across() -> dict | None:  # Zenoh server -> A -> DDS -> B's client
+                try:
+                    return await on_b.call_service("/zgate", {"data": True}, timeout=2.0)
+                except (ServiceError, TimeoutError):  # not discovered yet on B
+                    await asyncio.sleep(0.2)
+                    return None
+
+            async with asyncio.timeout(30):
+                while (answer := await across()) is None:
+                    pass
         finally:
-            for task in (talking, steering):
+            for task in (talking, steering, serving):
                 task.cancel()
                 with contextlib.suppress(asyncio.CancelledError):
                     await task
@@ -75,6 +90,7 @@ async def test_dds_and_zenoh_exchange_messages_once_and_a_service(
     assert len(seen_on_a) >= 20 and len(seen_on_a) == len(set(seen_on_a))  # no echo
     assert called["success"] is True and called["message"] == "gate via DDS", called
     assert requests == [{"data": True}]
+    assert answer == {"success": True, "message": "zenoh says True"}
 
 
 async def numbered_forces(subscription, count: int, timeout_s: float) -> list[int]:

@@ -109,3 +109,41 @@ async def test_humble_keys_carry_no_type_hash(zenoh_domain, zenoh_endpoint, regi
     assert len(taken["data"]) == 3 and all(d.startswith("humble ") for d in taken["data"])
     publisher = [t for t in tokens["tokens"] if "/MP/" in t and "%chatter" in t]
     assert publisher and publisher[0].split("/")[11] == "TypeHashNotSupported"
+
+
+async def test_large_messages_arrive_whole_through_the_bulk_writer(
+    zenoh_domain, zenoh_endpoint, registry
+):
+    """A 300 kB CompressedImage goes out through the bulk thread at DATA_LOW with *block*:
+    every one the participant gets is whole and decodes."""
+    async with (
+        run_bridge(zenoh_config(zenoh_domain, zenoh_endpoint)) as bridge,
+        RosbridgeClient(bridge.url, registry=registry) as client,
+    ):
+        await client.advertise("/camera/image/compressed", "sensor_msgs/msg/CompressedImage")
+
+        async def shoot() -> None:
+            for n in range(100_000):
+                data = bytes([n % 256]) * 300_000
+                await client.publish("/camera/image/compressed", {"format": "jpeg", "data": data})
+                await asyncio.sleep(0.1)
+
+        shooting = asyncio.create_task(shoot())
+        try:
+            taken = await run_peer(
+                zenoh_endpoint,
+                zenoh_domain,
+                "take",
+                "/camera/image/compressed",
+                "3",
+                "30",
+                "sensor_msgs/msg/CompressedImage",
+            )
+        finally:
+            shooting.cancel()
+            with contextlib.suppress(asyncio.CancelledError):
+                await shooting
+        publisher = bridge.plugins["zenoh"].topics.publishers["/camera/image/compressed"]
+    assert taken["sizes"] == [300_000] * 3
+    assert len(set(taken["data"])) == 3  # three different frames
+    assert publisher.bulk

@@ -16,8 +16,9 @@ usage:
   python3 zenoh_peer.py ENDPOINT DOMAIN call SERVICE TIMEOUT_S
       find SERVICE's server token, call it (std_srvs/srv/SetBool, data: true) on the key it
       announces, print the response.
-  python3 zenoh_peer.py ENDPOINT DOMAIN take TOPIC COUNT TIMEOUT_S
-      take COUNT std_msgs/msg/String samples from TOPIC; print their data in order.
+  python3 zenoh_peer.py ENDPOINT DOMAIN take TOPIC COUNT TIMEOUT_S [TYPE]
+      take COUNT samples of TYPE (std_msgs/msg/String unless told; any type whose `data` is a
+      string or bytes) from TOPIC; print their data (bytes: the first 8 in hex) and sizes.
   python3 zenoh_peer.py ENDPOINT DOMAIN latched TOPIC TIMEOUT_S
       join late: ask the publication caches of TOPIC (std_msgs/msg/String, transient local)
       for their history as rmw_zenoh's transient-local subscriptions do; print the first.
@@ -199,8 +200,7 @@ def call(session, domain, service, timeout_s):
     return {"error": "no reply", "replies": len(replies)}
 
 
-def take(session, domain, topic, count, timeout_s):
-    ros_type = "std_msgs/msg/String"
+def take(session, domain, topic, count, timeout_s, ros_type="std_msgs/msg/String"):
     _, held = declare_node(session, domain, "zenoh_reader")
     held.append(
         declare_endpoint(
@@ -208,7 +208,7 @@ def take(session, domain, topic, count, timeout_s):
         )
     )
     key = f"{domain}/{topic.strip('/')}/{dds_type(ros_type)}/{type_hash(ros_type)}"
-    data = []
+    data, sizes = [], []
     with session.declare_subscriber(key) as subscriber:
         deadline = time.monotonic() + timeout_s
         while len(data) < count and time.monotonic() < deadline:
@@ -216,8 +216,10 @@ def take(session, domain, topic, count, timeout_s):
             if sample is None:
                 time.sleep(0.01)
                 continue
-            data.append(STORE.deserialize_cdr(sample.payload.to_bytes(), ros_type).data)
-    return {"data": data}
+            msg = STORE.deserialize_cdr(sample.payload.to_bytes(), ros_type)
+            data.append(msg.data if isinstance(msg.data, str) else bytes(msg.data).hex()[:16])
+            sizes.append(len(msg.data))
+    return {"data": data, "sizes": sizes}
 
 
 def latched(session, domain, topic, timeout_s):
@@ -304,7 +306,7 @@ def main(argv):
         elif command == "serve":
             result = serve(session, domain, args[0], float(args[1]))
         elif command == "take":
-            result = take(session, domain, args[0], int(args[1]), float(args[2]))
+            result = take(session, domain, args[0], int(args[1]), float(args[2]), *args[3:])
         elif command == "call":
             result = call(session, domain, args[0], float(args[1]))
         else:
