@@ -83,6 +83,9 @@ class BridgeServer:
         # them speaks rosbridge v2. Their connections translate what the core sends them.
         self.protocols: dict[str, ProtocolFactory] = {}
         self._translators: dict[int, Callable[[Send], list[Send]]] = {}
+        # While another protocol's client's frame is handled: the links its messages went to
+        # that ask its reader to wait (its ops reach the core through the plug-in host).
+        self._pacing: set[ClientLink] | None = None
 
     @property
     def port(self) -> int:
@@ -173,7 +176,7 @@ class BridgeServer:
         self._tell_clients_changed()
         try:
             if other is not None:
-                await self._read_other(ws, other)
+                await self._read_other(ws, other, link, paced)
                 return
             busy_s = 0.0  # time spent handling this client's frames since it last yielded
             async for data in ws:
@@ -201,16 +204,29 @@ class BridgeServer:
             self.apply(self.core.disconnect(client_id, time.time_ns()))
             self._tell_clients_changed()
 
-    @staticmethod
-    async def _read_other(ws: ServerConnection, other: ProtocolConnection) -> None:
-        """Frames of another protocol's client, with the same fair turns as rosbridge's."""
+    async def _read_other(
+        self,
+        ws: ServerConnection,
+        other: ProtocolConnection,
+        link: ClientLink,
+        paced: set[ClientLink],
+    ) -> None:
+        """Frames of another protocol's client, with the same fair turns and the same pacing
+        by backed-up subscribers as a rosbridge client's."""
         busy_s = 0.0
         async for data in ws:
             started = time.perf_counter()
-            other.receive(data)
+            self._pacing = paced
+            try:
+                other.receive(data)
+            finally:
+                self._pacing = None
             busy_s += time.perf_counter() - started
-            if busy_s > TURN_S:
+            if paced or busy_s > TURN_S or link.queue.answers_waiting > ANSWER_BACKLOG:
                 await asyncio.sleep(0)
+                while paced:
+                    await paced.pop().drained()
+                await link.answers_taken(ANSWER_BACKLOG)
                 busy_s = 0.0
 
     def _tell_clients_changed(self) -> None:
@@ -235,6 +251,8 @@ class BridgeServer:
 
     def apply(self, effects: list[Effect], paced: set[ClientLink] | None = None) -> None:
         """Carry out effects; links that ask publishers to wait are added to `paced`."""
+        if paced is None:
+            paced = self._pacing
         for effect in effects:
             if type(effect) is Send:
                 link = self.links.get(effect.client_id)
