@@ -61,6 +61,17 @@ async def test_a_refused_origin_is_refused_for_foxglove_too() -> None:
             assert ws.subprotocol == FOXGLOVE
 
 
+async def test_the_client_limit_counts_foxglove_clients() -> None:
+    async with (
+        run_bridge(BridgeConfig(port=0, max_clients=1)) as bridge,
+        websockets.connect(bridge.url, subprotocols=[FOXGLOVE]),
+    ):
+        with pytest.raises(InvalidStatus) as refused:
+            async with websockets.connect(bridge.url):
+                pass
+        assert refused.value.response.status_code == 503
+
+
 async def test_with_an_auth_secret_a_foxglove_client_may_do_nothing() -> None:
     """Foxglove's protocol has no rosauth op: until roles give it a way in, it is refused."""
     config = BridgeConfig(port=0, auth_secret=SecretStr("s3cret"))
