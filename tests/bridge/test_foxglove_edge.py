@@ -156,3 +156,37 @@ async def test_hostile_frames_get_a_status_and_one_log_line_each(
     assert lines[1].endswith("Foxglove op=?: unknown op: 'frobnicate'")
     assert "op=binary opcode 1: message on unknown client channel 5" in lines[3]
     assert all(line.startswith("[/rosbridge_client_") for line in lines)
+
+
+async def test_a_foxglove_publisher_is_paced_so_a_reader_loses_nothing() -> None:
+    """A burst of 30 MB from a Foxglove client: the bridge stops reading it while the
+    subscriber's queue is backed up, as it does for a rosbridge publisher."""
+    config = BridgeConfig(port=0, send_buffer_bytes=4 * 1024 * 1024)
+    text = "y" * 100_000
+    count = 300
+    async with (
+        run_bridge(config) as bridge,
+        websockets.connect(bridge.url, max_size=None) as reader,
+        websockets.connect(bridge.url, subprotocols=[FOXGLOVE]) as publisher,
+    ):
+        topic = {"topic": "/burst", "type": "std_msgs/msg/String"}
+        await reader.send(json.dumps({"op": "subscribe", **topic, "id": "r"}))
+        channel = {"id": 1, "topic": "/burst", "encoding": "json", "schemaName": topic["type"]}
+        await publisher.send(json.dumps({"op": "advertise", "channels": [channel]}))
+        await asyncio.sleep(0.2)  # (both ops handled)
+        frame = b"\x01\x01\x00\x00\x00" + orjson.dumps({"data": text})
+
+        async def read_all() -> int:
+            received = 0
+            while received < count:
+                message = json.loads(await reader.recv())
+                received += message.get("op") == "publish"
+                await asyncio.sleep(0.002)  # a reader that keeps up, slower than the burst
+            return received
+
+        reading = asyncio.create_task(read_all())
+        for _ in range(count):
+            await publisher.send(frame)
+        assert await asyncio.wait_for(reading, 40) == count
+        reader_id = min(bridge.server.stats())
+        assert bridge.server.stats()[reader_id]["dropped"] == {}
