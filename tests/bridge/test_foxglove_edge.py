@@ -5,6 +5,7 @@ while a rosbridge client on the same port reads everything."""
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import json
 import ssl
 from pathlib import Path
@@ -177,16 +178,17 @@ async def test_a_foxglove_publisher_is_paced_so_a_reader_loses_nothing() -> None
         frame = b"\x01\x01\x00\x00\x00" + orjson.dumps({"data": text})
 
         async def read_all() -> int:
+            """Messages received until all came or none came for 5 s (some were lost)."""
             received = 0
-            while received < count:
-                message = json.loads(await reader.recv())
-                received += message.get("op") == "publish"
-                await asyncio.sleep(0.002)  # a reader that keeps up, slower than the burst
+            with contextlib.suppress(TimeoutError):
+                while received < count:
+                    message = json.loads(await asyncio.wait_for(reader.recv(), 5))
+                    received += message.get("op") == "publish"
             return received
 
         reading = asyncio.create_task(read_all())
         for _ in range(count):
             await publisher.send(frame)
-        assert await asyncio.wait_for(reading, 40) == count
         reader_id = min(bridge.server.stats())
+        assert await reading == count, bridge.server.stats()[reader_id]
         assert bridge.server.stats()[reader_id]["dropped"] == {}
