@@ -85,6 +85,9 @@ class BridgeServer:
         # them speaks rosbridge v2. Their connections translate what the core sends them.
         self.protocols: dict[str, ProtocolFactory] = {}
         self._translators: dict[int, Callable[[Send], list[Send]]] = {}
+        # While another protocol's client's frame is handled: the links its messages went to
+        # that ask its reader to wait (its ops reach the core through the plug-in host).
+        self._pacing: set[ClientLink] | None = None
 
     @property
     def port(self) -> int:
@@ -177,7 +180,7 @@ class BridgeServer:
         self.apply(self.core.admit(client_id, time.time_ns(), token))
         try:
             if other is not None:
-                await self._read_other(ws, other, client_id)
+                await self._read_other(ws, other, link, paced, client_id)
                 return
             busy_s = 0.0  # time spent handling this client's frames since it last yielded
             async for data in ws:
@@ -215,17 +218,34 @@ class BridgeServer:
             await asyncio.sleep(max(0.0, (until_ns - time.time_ns()) / 1e9))
 
     async def _read_other(
-        self, ws: ServerConnection, other: ProtocolConnection, client_id: int
+        self,
+        ws: ServerConnection,
+        other: ProtocolConnection,
+        link: ClientLink,
+        paced: set[ClientLink],
+        client_id: int,
     ) -> None:
-        """Frames of another protocol's client, with the same fair turns as rosbridge's and
-        the same hold past its quota."""
+        """Frames of another protocol's client, with the same fair turns, the same pacing by
+        backed-up subscribers and the same hold past its quota as a rosbridge client's."""
         busy_s = 0.0
         async for data in ws:
             started = time.perf_counter()
-            other.receive(data)
+            self._pacing = paced
+            try:
+                other.receive(data)
+            finally:
+                self._pacing = None
             busy_s += time.perf_counter() - started
-            if busy_s > TURN_S or client_id in self._holds:
+            if (
+                paced
+                or busy_s > TURN_S
+                or link.queue.answers_waiting > ANSWER_BACKLOG
+                or client_id in self._holds
+            ):
                 await asyncio.sleep(0)
+                while paced:
+                    await paced.pop().drained()
+                await link.answers_taken(ANSWER_BACKLOG)
                 await self._held(client_id)
                 busy_s = 0.0
 
@@ -251,6 +271,8 @@ class BridgeServer:
 
     def apply(self, effects: list[Effect], paced: set[ClientLink] | None = None) -> None:
         """Carry out effects; links that ask publishers to wait are added to `paced`."""
+        if paced is None:
+            paced = self._pacing
         for effect in effects:
             if type(effect) is Send:
                 link = self.links.get(effect.client_id)

@@ -62,9 +62,11 @@ class FoxglovePlugin:
         return connection
 
     async def _watch(self) -> None:
+        """Compare while Foxglove clients are connected (a new one starts with a fresh look)."""
         while True:
             await asyncio.sleep(WATCH_S)
-            self.reconcile()
+            if self.connections:
+                self.reconcile()
 
     def reconcile(self) -> None:
         """Tell clients what changed since the last look (channels first: a client may

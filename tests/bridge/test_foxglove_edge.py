@@ -5,6 +5,7 @@ while a rosbridge client on the same port reads everything."""
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import json
 import ssl
 from pathlib import Path
@@ -59,6 +60,17 @@ async def test_a_refused_origin_is_refused_for_foxglove_too() -> None:
             bridge.url, subprotocols=[FOXGLOVE], origin="https://app.example"
         ) as ws:
             assert ws.subprotocol == FOXGLOVE
+
+
+async def test_the_client_limit_counts_foxglove_clients() -> None:
+    async with (
+        run_bridge(BridgeConfig(port=0, max_clients=1)) as bridge,
+        websockets.connect(bridge.url, subprotocols=[FOXGLOVE]),
+    ):
+        with pytest.raises(InvalidStatus) as refused:
+            async with websockets.connect(bridge.url):
+                pass
+        assert refused.value.response.status_code == 503
 
 
 async def test_with_an_auth_secret_a_foxglove_client_may_do_nothing() -> None:
@@ -145,3 +157,38 @@ async def test_hostile_frames_get_a_status_and_one_log_line_each(
     assert lines[1].endswith("Foxglove op=?: unknown op: 'frobnicate'")
     assert "op=binary opcode 1: message on unknown client channel 5" in lines[3]
     assert all(line.startswith("[/rosbridge_client_") for line in lines)
+
+
+async def test_a_foxglove_publisher_is_paced_so_a_reader_loses_nothing() -> None:
+    """A burst of 30 MB from a Foxglove client: the bridge stops reading it while the
+    subscriber's queue is backed up, as it does for a rosbridge publisher."""
+    config = BridgeConfig(port=0, send_buffer_bytes=4 * 1024 * 1024)
+    text = "y" * 100_000
+    count = 300
+    async with (
+        run_bridge(config) as bridge,
+        websockets.connect(bridge.url, max_size=None) as reader,
+        websockets.connect(bridge.url, subprotocols=[FOXGLOVE]) as publisher,
+    ):
+        topic = {"topic": "/burst", "type": "std_msgs/msg/String"}
+        await reader.send(json.dumps({"op": "subscribe", **topic, "id": "r"}))
+        channel = {"id": 1, "topic": "/burst", "encoding": "json", "schemaName": topic["type"]}
+        await publisher.send(json.dumps({"op": "advertise", "channels": [channel]}))
+        await asyncio.sleep(0.2)  # (both ops handled)
+        frame = b"\x01\x01\x00\x00\x00" + orjson.dumps({"data": text})
+
+        async def read_all() -> int:
+            """Messages received until all came or none came for 5 s (some were lost)."""
+            received = 0
+            with contextlib.suppress(TimeoutError):
+                while received < count:
+                    message = json.loads(await asyncio.wait_for(reader.recv(), 5))
+                    received += message.get("op") == "publish"
+            return received
+
+        reading = asyncio.create_task(read_all())
+        for _ in range(count):
+            await publisher.send(frame)
+        reader_id = min(bridge.server.stats())
+        assert await reading == count, bridge.server.stats()[reader_id]
+        assert bridge.server.stats()[reader_id]["dropped"] == {}

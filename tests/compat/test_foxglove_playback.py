@@ -92,7 +92,9 @@ async def test_foxglove_client_pauses_seeks_and_speeds_up_the_player(
     # one recorded at the seek time (give or take what was due while the request travelled).
     index = after["message"]["angular_velocity"]["z"]
     assert SEEK_OFFSET_S * IMU_HZ <= index < (SEEK_OFFSET_S + 0.5) * IMU_HZ
-    assert abs(int(after["timestamp"]) - seek_target) < NS_PER_S // 2  # the playback clock
+    # Its timestamp is on the playback clock (the recording's 2023), not today's: near the
+    # seek target, give or take the player's read-ahead after the seek on a loaded machine.
+    assert abs(int(after["timestamp"]) - seek_target) < 2 * NS_PER_S
 
     assert result["faster"]["speed"] == 2.0 and result["faster"]["status"] == 0
     assert START_NS <= int(result["firstTime"]) <= START_NS + int(SECONDS * NS_PER_S)

@@ -82,7 +82,12 @@ await until(() => messages.length >= 3);
 await until(() => times.length >= 1);
 
 const paused = await control(false, 1.0, undefined, "pause-1");
-await sleep(300); // what was already on its way arrives
+// What was already on its way arrives: wait for 300 ms without a message (at most 5 s).
+for (let quietSince = Date.now(), last = messages.length, end = Date.now() + 5000; Date.now() < end; ) {
+  await sleep(50);
+  if (messages.length !== last) [quietSince, last] = [Date.now(), messages.length];
+  else if (Date.now() - quietSince >= 300) break;
+}
 const countPaused = messages.length;
 await sleep(700);
 const duringPause = messages.length - countPaused;
