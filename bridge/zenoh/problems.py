@@ -10,20 +10,27 @@ from __future__ import annotations
 import logging
 import threading
 import time
+from collections.abc import Callable
 
 INTERVAL_S = 10.0  # a sender repeating the same mistake at sensor rate gets one line per 10 s
 
 
 class ProblemLog:
-    def __init__(self, logger: logging.Logger, interval_s: float = INTERVAL_S) -> None:
+    def __init__(
+        self,
+        logger: logging.Logger,
+        interval_s: float = INTERVAL_S,
+        clock_s: Callable[[], float] = time.monotonic,
+    ) -> None:
         self._logger = logger
         self._interval_s = interval_s
+        self._clock_s = clock_s
         self._lock = threading.Lock()
         self._last: dict[tuple[str, str], tuple[float, int]] = {}  # -> (said at, dropped since)
 
     def dropped(self, where: str, kind: str, detail: str) -> None:
         """A sample or query on `where` was dropped because of `kind` (`detail` says more)."""
-        now = time.monotonic()
+        now = self._clock_s()
         with self._lock:
             said_at, silent = self._last.get((where, kind), (-self._interval_s, 0))
             if now - said_at < self._interval_s:

@@ -112,12 +112,16 @@ class ZenohServices:
             self._problems.dropped(name, "service not offered", str(exc))
             return
         listen = key.rsplit("/", 1)[0] + "/*"
-        queryable = self._node.session.declare_queryable(
-            listen,
-            lambda query: self._take_query(name, type_name, query),
-            complete=True,
-            allowed_origin=zenoh.Locality.REMOTE,
-        )
+        try:
+            queryable = self._node.session.declare_queryable(
+                listen,
+                lambda query: self._take_query(name, type_name, query),
+                complete=True,
+                allowed_origin=zenoh.Locality.REMOTE,
+            )
+        except zenoh.ZError as exc:
+            self._problems.dropped(name, "service not offered", str(exc))
+            return
         declared = self._node.declare(EntityKind.SERVICE, Endpoint(name, type_name, hash_))
         self.servers[name] = _Server(name, type_name, queryable, declared)
 

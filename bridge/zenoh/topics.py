@@ -14,8 +14,9 @@ dropped with a rate-limited line (`ProblemLog`) and the rest go on.
 
 from __future__ import annotations
 
+import contextlib
 import itertools
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from functools import partial
 from typing import Any
@@ -104,10 +105,21 @@ class ZenohTopics:
             _close(self.subscribers.pop(topic))
         for topic, wanted in publishers.items():
             if topic not in self.publishers:
-                self.publishers[topic] = self._publisher(topic, wanted)
+                with self._refusal(topic):
+                    self.publishers[topic] = self._publisher(topic, wanted)
         for topic, wanted in subscribers.items():
             if topic not in self.subscribers:
-                self.subscribers[topic] = self._subscriber(topic, wanted)
+                with self._refusal(topic):
+                    self.subscribers[topic] = self._subscriber(topic, wanted)
+
+    @contextlib.contextmanager
+    def _refusal(self, topic: str) -> Iterator[None]:
+        """A topic Zenoh refuses (or whose type has no DDS name) is said, not fatal to the
+        others; it is tried again at the next reconcile."""
+        try:
+            yield
+        except (KeyProblem, ValueError, zenoh.ZError) as exc:
+            self._problems.dropped(topic, "topic not mirrored", str(exc))
 
     def _endpoint(self, topic: str, wanted: Wanted) -> tuple[str, Endpoint]:
         hash_ = type_hash(self._registry, wanted.type_name, self._node.distro)

@@ -67,6 +67,7 @@ BRIDGE_OPTIONS = (
     "zenoh_listen",
     "zenoh_connect",
     "zenoh_config",
+    "zenoh_distro",
 )
 PASSED = " (passed to the bridge)"
 

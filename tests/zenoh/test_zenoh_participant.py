@@ -61,6 +61,7 @@ async def test_participant_sees_tokens_reads_imu_and_steers_the_vessel(
             speed = await moving
             nodes = await watcher.call_service("/rosapi/nodes", {})
             publishers = await watcher.call_service("/rosapi/publishers", {"topic": "/cmd_wrench"})
+            details = await watcher.call_service("/rosapi/node_details", {"node": "/zenoh_helm"})
             imu_result = await imu
             tokens = await run_peer(zenoh_endpoint, zenoh_domain, "tokens", "riverbridge_", "20")
             steering.cancel()
@@ -72,6 +73,7 @@ async def test_participant_sees_tokens_reads_imu_and_steers_the_vessel(
     assert speed >= 0.5
     assert "/zenoh_helm" in nodes["nodes"]  # rosapi lists the Zenoh graph (its tokens)
     assert "/zenoh_helm" in publishers["publishers"]
+    assert details["publishing"] == ["/cmd_wrench"]
     messages = imu_result["messages"]
     assert len(messages) == 5
     assert all(m["frame_id"] == "imu" and m["covariance_length"] == 9 for m in messages)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import logging
+
 import pytest
 
 from bridge.dds.qos import QosProfile
@@ -31,6 +33,7 @@ from bridge.zenoh.liveliness import (
     qos_element,
     token_key,
 )
+from bridge.zenoh.problems import ProblemLog
 
 STRING_HASH = "RIHS01_df668c740482bbd48fb39d76a70dfd4bd59db1288021743503259e948f6b1a18"
 # design.md's examples, verbatim.
@@ -152,3 +155,21 @@ def test_graph_from_tokens_leaves_out_its_own_session():
     assert graph.nodes() == {"/talker", "/listener"}
     assert graph.delete(PUB_TOKEN) and "/talker" not in graph.topics()["/chatter"].publishers
     assert graph.put(PUB_TOKEN.replace("@ros2_lv/0/", "@ros2_lv/1/")) is None  # another domain
+
+
+def test_problem_lines_are_rate_limited_per_topic_and_kind(caplog):
+    now = [100.0]
+    log = ProblemLog(logging.getLogger("test.zenoh"), interval_s=10.0, clock_s=lambda: now[0])
+    with caplog.at_level(logging.WARNING, logger="test.zenoh"):
+        for _ in range(5):
+            log.dropped("/chatter", "undecodable sample", "3 bytes")
+        log.dropped("/imu", "undecodable sample", "3 bytes")
+        now[0] += 10.0
+        log.dropped("/chatter", "undecodable sample", "3 bytes")
+    lines = [r.getMessage() for r in caplog.records]
+    assert lines == [
+        "Zenoh: undecodable sample on /chatter dropped: 3 bytes",
+        "Zenoh: undecodable sample on /imu dropped: 3 bytes",
+        "Zenoh: undecodable sample on /chatter dropped: 3 bytes"
+        " (4 more dropped since the last line)",
+    ]
