@@ -13,6 +13,7 @@ import sys
 # subcommand -> (module with ``main(argv) -> int``, one-line help)
 SUBCOMMANDS: dict[str, tuple[str, str]] = {
     "bridge": ("bridge.cli", "run the rosbridge v2 websocket server"),
+    "token": ("bridge.token_cli", "print a signed bridge token for a role (--roles)"),
     "sim": ("simulator.cli", "run the simulator (scene, vessel, sensors) against a bridge"),
     "nav": ("navigation.cli", "run the navigation service against a bridge"),
     "guide": ("guidance.cli", "run guidance and control (the autopilot) against a bridge"),
@@ -27,6 +28,7 @@ SUBCOMMANDS: dict[str, tuple[str, str]] = {
         "clients.recording.play_cli",
         "publish an MCAP recording into a bridge at its recorded timing",
     ),
+    "link": ("clients.linkemu.cli", "carry connections over an emulated lan, wifi or 4g link"),
 }
 
 

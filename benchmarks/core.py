@@ -12,7 +12,10 @@ on the core call 10.6 / 11.6; with the two per-frame value objects (`InboundFram
 `ValidMessage`) no longer frozen dataclasses 9.3-9.8 / 10.7-11.2. 10 subscribers: 25-28 µs
 in all three.
 
-Usage: python -m benchmarks.core [--frames 50000] [--repeat 5]
+With `--roles` the bridge has a roles file (`bridge.roles`): the same frames, each checked by
+the policy (allow-list, token buckets, per-principal counters) before it takes effect.
+
+Usage: python -m benchmarks.core [--frames 50000] [--repeat 5] [--roles]
 """
 
 from __future__ import annotations
@@ -25,13 +28,34 @@ from bridge.config import BridgeConfig
 from bridge.core import BridgeCore
 from schemas import codec_cbor, codec_json
 from schemas.registry import TypeRegistry
+from schemas.roles_config import RolesConfig
 
 TOPIC, TYPE = "/chatter", "std_msgs/msg/String"
 
 
-def per_frame_us(encoding: str, subscribers: int, frames: int, repeat: int) -> float:
+def roles_config() -> BridgeConfig:
+    """A bridge with `--roles`: the publisher's role allows its topic, with quotas it never
+    reaches (so the policy's whole check, token buckets included, runs on every frame)."""
+    roles = RolesConfig.model_validate(
+        {
+            "roles": {
+                "sensor": {
+                    "publish": ["/chatter", "/imu*"],
+                    "subscribe": ["*"],
+                    "limits": {"messages_per_s": 1e9, "bytes_per_s": 1e12},
+                }
+            },
+            "unauthenticated_role": "sensor",
+        }
+    )
+    return BridgeConfig(roles=roles)
+
+
+def per_frame_us(
+    encoding: str, subscribers: int, frames: int, repeat: int, roles: bool = False
+) -> float:
     """Median over `repeat` batches of the mean core time per publish frame, in µs."""
-    core = BridgeCore(BridgeConfig(), TypeRegistry())
+    core = BridgeCore(roles_config() if roles else BridgeConfig(), TypeRegistry())
     encode = codec_json.dumps if encoding == "json" else codec_cbor.dumps
 
     def receive(client: int, op: dict[str, object]) -> None:
@@ -58,11 +82,14 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--frames", type=int, default=50_000)
     parser.add_argument("--repeat", type=int, default=5)
+    parser.add_argument(
+        "--roles", action="store_true", help="with a roles file: the policy checks every frame"
+    )
     args = parser.parse_args(argv)
     print(f"{'encoding':8s} {'subscribers':>11s} {'µs/frame':>9s} {'frames/s':>10s}")
     for encoding in ("json", "cbor"):
         for subscribers in (1, 10):
-            us = per_frame_us(encoding, subscribers, args.frames, args.repeat)
+            us = per_frame_us(encoding, subscribers, args.frames, args.repeat, args.roles)
             print(f"{encoding:8s} {subscribers:11d} {us:9.2f} {1e6 / us:10,.0f}")
     return 0
 

@@ -4,6 +4,8 @@ rosauth's `auth` op (who may *use* a connection) lives in `bridge.ops.auth`; thi
 what the edge decides before a websocket exists:
 
 - `tls_context`: `--certfile/--keyfile` serve `wss://` and the HTTP pages over `https://`.
+- `handshake_token`: a bridge token presented at the handshake, as `Authorization: Bearer` or
+  `?token=` (browsers cannot set headers); the core checks it (`BridgeCore.admit`).
 - `HandshakePolicy.refusal`: a browser handshake whose `Origin` matches none of
   `--allowed-origins` gets HTTP 403 (a client that sends no Origin, i.e. not a browser, and
   the bridge's own dashboard, same origin, are not affected); past `--max-clients` HTTP 503.
@@ -18,6 +20,7 @@ from fnmatch import fnmatchcase
 from websockets.http11 import Request
 
 from bridge.config import BridgeConfig
+from bridge.roles import bearer_token
 
 
 def tls_context(config: BridgeConfig) -> ssl.SSLContext | None:
@@ -39,6 +42,16 @@ def same_origin(origin: str, host_header: str | None) -> bool:
     if not host_header:
         return False
     return urllib.parse.urlsplit(origin).netloc.lower() == host_header.lower()
+
+
+def handshake_token(request: Request) -> str | None:
+    """The token of `Authorization: Bearer <token>`, else of the URL's `?token=`, else None."""
+    token = bearer_token(request.headers.get("Authorization"))
+    if token is not None:
+        return token
+    query = urllib.parse.parse_qs(urllib.parse.urlsplit(request.path).query)
+    found = query.get("token")
+    return found[0] if found else None
 
 
 class HandshakePolicy:

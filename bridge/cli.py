@@ -22,7 +22,7 @@ from bridge.access import scheme, tls_context
 from bridge.compose import run_bridge
 from bridge.config import BridgeConfig
 from bridge.dds.cyclone_xml import CycloneSettings, cyclone_xml
-from bridge.errors import DdsStartError
+from bridge.errors import DdsStartError, ZenohStartError
 from schemas.bridge_config import GROUPS
 from schemas.options import add_options, config_values, invalid_options
 from schemas.runtime import event_loop
@@ -85,12 +85,22 @@ async def serve_until_signalled(config: BridgeConfig) -> None:
             loop.remove_signal_handler(sig)
 
 
+def check_zenoh_config(config: BridgeConfig) -> None:
+    """ValueError naming the problem if `--zenoh-config`'s file is not a Zenoh configuration."""
+    if config.zenoh and config.zenoh_config is not None:
+        from bridge.zenoh.session import ZenohSettings, session_config
+
+        settings = ZenohSettings(config.zenoh_listen, config.zenoh_connect, config.zenoh_config)
+        session_config(settings)
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
         config = config_from_args(args)
         tls_context(config)  # a certificate that does not load fails here, not at start-up
+        check_zenoh_config(config)  # a Zenoh configuration file Zenoh refuses fails here too
     except ValidationError as exc:
         parser.error(invalid_options(exc, BridgeConfig))
     except (ValueError, OSError, ssl.SSLError) as exc:
@@ -115,7 +125,7 @@ def main(argv: list[str] | None = None) -> int:
     with contextlib.suppress(KeyboardInterrupt):
         try:
             event_loop.run(serve_until_signalled(config), loop_name)
-        except DdsStartError as exc:
+        except (DdsStartError, ZenohStartError) as exc:
             logger.error("%s", exc)
             return 1
     return 0

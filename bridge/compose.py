@@ -15,7 +15,9 @@ from typing import Any
 
 import bridge.dds
 import bridge.foxglove.plugin
+import bridge.zenoh
 from bridge.access import scheme
+from bridge.audit import AuditTrail
 from bridge.config import BridgeConfig
 from bridge.core import BridgeCore
 from bridge.host import Plugin, PluginHost
@@ -33,6 +35,8 @@ def plugin_table(config: BridgeConfig) -> list[tuple[str, bool, PluginFactory]]:
         ("dashboard", True, Dashboard),
         ("telemetry", True, BridgeTelemetry),
         ("dds", config.dds, bridge.dds.plugin),
+        ("audit", config.audit_log is not None, AuditTrail),
+        ("zenoh", config.zenoh, bridge.zenoh.plugin),
         ("foxglove", True, bridge.foxglove.plugin.plugin),
     ]
 

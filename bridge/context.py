@@ -10,6 +10,7 @@ from bridge.config import BridgeConfig
 from bridge.effects import Close, DeadlineKey, Effect, Schedule, Send
 from bridge.graph import Graph
 from bridge.outgoing import ControlMessage, Delivery, TopicMessage
+from bridge.roles import Policy
 from bridge.session import ClientSession, StatusLevel
 from bridge.sinks import LocalFanout, MessageSink
 from bridge.subscription import Release, Subscription
@@ -67,6 +68,8 @@ class BridgeState:
         # Services the bridge answers itself, name -> RosapiService (set by the core).
         self.rosapi: dict[str, RosapiService] = {}
         self.clients_ever = 0
+        # Who may do what (--roles) and the audit trail (bridge.roles); inactive without both.
+        self.policy = Policy(config.roles)
 
     @property
     def external_nodes(self) -> frozenset[str]:

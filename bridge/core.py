@@ -13,21 +13,24 @@ from collections.abc import Callable, Iterable
 
 from bridge.config import BridgeConfig
 from bridge.context import BridgeState, Context, log_problem_summary
-from bridge.effects import DeadlineKey, Effect
+from bridge.effects import DeadlineKey, Effect, Hold
 from bridge.errors import BridgeError, InvalidNameError
 from bridge.inbound import InboundFrame, RefusedFrame, decode_frame, read_frame
 from bridge.names import absolute_name
 from bridge.ops import OpRoute, actions, auth, fragments, levels, merge_routes, services, topics
 from bridge.outgoing import MIN_FRAGMENT_SIZE, TopicMessage
+from bridge.roles import TRUSTED, AuditSink, new_grant
 from bridge.rosapi import ROSAPI_SERVICES
 from bridge.rosapi.common import RosapiService
 from bridge.session import ClientSession
 from bridge.sinks import MessageSink
 from bridge.validation import PublishCheck
+from schemas import tokens
 from schemas.errors import SchemaError
 from schemas.message import normalize, payload_bytes
 from schemas.ops import MAX_NAME_CHARS, OpError, reply_id
 from schemas.registry import TypeRegistry
+from schemas.roles_config import Action
 from schemas.safety import echo, safe_text
 from schemas.specs import MessageSpec
 from schemas.values import JsonObject, JsonValue, OpId
@@ -44,6 +47,7 @@ DEADLINE_HANDLERS: dict[str, Callable[..., None]] = {
     "call": services.on_call_deadline,
     "fragment": fragments.on_fragment_deadline,
     "problems": log_problem_summary,
+    "auth_grace": auth.on_grace_deadline,
 }
 
 # Clean-up per op family when a client leaves; each releases what the client owned.
@@ -68,14 +72,54 @@ class BridgeCore:
         self.state.clients_ever += 1
         client_id = self.state.clients_ever
         # An in-process client of another middleware (`node` given) is trusted; a websocket
-        # client must authenticate first when the bridge has an auth secret.
-        authenticated = node is not None or self.state.config.auth_secret is None
-        node = node or f"/rosbridge_client_{client_id}"
-        self.state.sessions[client_id] = ClientSession(
-            client_id, node, peer, authenticated=authenticated
+        # client must authenticate first when the bridge has an auth secret (and no role for
+        # clients that do not: then it starts with that role).
+        config = self.state.config
+        trusted = node is not None
+        session = self.state.sessions[client_id] = ClientSession(
+            client_id,
+            node or f"/rosbridge_client_{client_id}",
+            peer,
+            authenticated=trusted or not config.needs_auth(),
         )
-        logger.info("[%s] connected from %s", node, peer or "?")
+        if trusted:
+            session.principal = TRUSTED
+        elif config.roles is not None and config.roles.unauthenticated_role is not None:
+            session.role = config.roles.unauthenticated_role
+            role = config.roles.roles[session.role]
+            session.grant = new_grant(session.role, role, 0)
+        logger.info("[%s] connected from %s", session.node, peer or "?")
         return client_id
+
+    def admit(self, client_id: int, now_ns: int, token: str | None = None) -> list[Effect]:
+        """A websocket client's handshake is done: check the token it presented there
+        (`Authorization: Bearer`, `?token=`), else give it `--auth-grace` to authenticate.
+        Without a secret a token is ignored, as the `auth` op is."""
+        ctx = Context(self.state, now_ns)
+        session = self.state.sessions.get(client_id)
+        if session is None:
+            return []
+        if token is not None and self.state.config.auth_secret is not None:
+            auth.authenticate_token(ctx, session, token, None)
+        elif not session.authenticated:
+            grace_ns = int(self.state.config.auth_grace_s * 1e9)
+            ctx.schedule(("auth_grace", client_id), now_ns + grace_ns)
+        return ctx.effects
+
+    def authorize(self, client_id: int, action: Action | str, name: str) -> str | None:
+        """May client `client_id` do `action` on `name`? The refusal text, or None. For other
+        protocols (Foxglove) and mirrors acting on a client's behalf: the same roles as ops."""
+        session = self.state.sessions.get(client_id)
+        if session is None:
+            return f"client {client_id} is not connected"
+        if not session.authenticated:
+            return "not authenticated"
+        action = Action(action)
+        # Parameter names are not ROS names (`/node:param`): matched as given, as the core
+        # matches the /rosapi param calls (bridge.roles.param_name).
+        params = (Action.GET_PARAM, Action.SET_PARAM)
+        target = name if action in params else absolute_name(name)
+        return self.state.policy.authorize(session, action, target)
 
     def disconnect(self, client_id: int, now_ns: int) -> list[Effect]:
         """Release everything the client owned and answer whatever waited on it."""
@@ -227,9 +271,19 @@ class BridgeCore:
                 ctx,
                 session,
                 message,
-                "not authenticated: this bridge needs a valid auth op (rosauth) before any other",
+                "not authenticated: this bridge needs a valid auth op (a token or rosauth's MAC) "
+                "before any other",
             )
             return
+        policy = self.state.policy
+        if policy.active:
+            wire_bytes = ctx.frame.wire_bytes if ctx.frame is not None else 0
+            refusal = policy.check(session, route.op, message, wire_bytes, ctx.now_ns)
+            if refusal is not None:
+                answer_failed_request(ctx, session, message, refusal.text)
+                if refusal.quota:  # read nothing more of it until its quota has room
+                    ctx.effects.append(Hold(session.client_id, refusal.retry_ns))
+                return
         try:
             route.run(ctx, session, message)
         except OpError as exc:  # the op did not parse: nothing was handled
@@ -256,6 +310,25 @@ class BridgeCore:
     def remove_sink(self, sink: MessageSink) -> None:
         with contextlib.suppress(ValueError):
             self.state.sinks.remove(sink)
+
+    def may_read_metrics(self, token: str | None, now_ns: int) -> bool:
+        """/metrics for everyone, unless the roles file says `metrics_role_only`: then only
+        for a valid token whose role has `metrics = true`."""
+        roles, secret = self.state.config.roles, self.state.config.auth_secret
+        if roles is None or not roles.metrics_role_only:
+            return True
+        if token is None or secret is None:
+            return False
+        try:
+            claims = tokens.verify(secret.get_secret_value(), token, now_ns / 1e9)
+        except tokens.TokenError:
+            return False
+        role = roles.roles.get(claims.role)
+        return role is not None and role.metrics
+
+    def set_audit(self, sink: AuditSink | None) -> None:
+        """Where the policy writes audit entries (`--audit-log`); None: nowhere."""
+        self.state.policy.set_audit(sink)
 
     def answer_service(self, name: str, service: RosapiService) -> None:
         """Answer calls to `name` in the bridge itself, as rosapi's (the stats service)."""

@@ -50,4 +50,17 @@ class Schedule:
     at_ns: int
 
 
-Effect = Send | Close | Schedule
+@dataclass(frozen=True, slots=True)
+class Hold:
+    """Read nothing more from client `client_id` until the wall clock reaches `until_ns`.
+
+    A client past its quota (`bridge.roles`) waits on TCP instead of costing the bridge the
+    decoding of messages that would only be dropped: another principal's messages keep
+    their pace while one floods.
+    """
+
+    client_id: int
+    until_ns: int
+
+
+Effect = Send | Close | Schedule | Hold

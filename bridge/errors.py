@@ -29,3 +29,7 @@ class RosapiError(BridgeError):
 
 class DdsStartError(BridgeError):
     """The bridge cannot join its DDS domain (bad interface, Cyclone refused the config)."""
+
+
+class ZenohStartError(BridgeError):
+    """The bridge cannot open its Zenoh session (bad configuration, an endpoint not bound)."""

@@ -22,10 +22,12 @@ from bridge.effects import Effect, Send
 from bridge.graph import ActionEntry, ServiceEntry, TopicEntry
 from bridge.http import HttpRoutes
 from bridge.link import Delivered
+from bridge.roles import AuditSink, PrincipalCounters, bearer_token
 from bridge.rosapi.common import RosapiHandler, RosapiService
 from bridge.session import ClientSession
 from bridge.sinks import MessageSink
 from schemas.registry import TypeRegistry
+from schemas.roles_config import Action
 from schemas.runtime.event_loop import cancel_and_wait
 from schemas.values import JsonObject, OpId
 
@@ -92,6 +94,7 @@ class PluginHost:
         self._core = core
         self._edge = edge
         self._tasks: set[asyncio.Task[None]] = set()
+        self._graph_nodes: dict[str, frozenset[str]] = {}  # source -> nodes it speaks for
 
     # -- what a plug-in reads ----------------------------------------------------------------
 
@@ -226,6 +229,50 @@ class PluginHost:
     def set_external_nodes(self, source: str, nodes: Iterable[str]) -> None:
         """The nodes another graph (`source`: "dds", "zenoh"...) has, for rosapi's listings."""
         self._core.set_external_nodes(source, nodes)
+
+    # -- roles: one decision for every protocol and mirror (bridge.roles) --------------------
+
+    def authorize(self, client_id: int, action: Action | str, name: str) -> str | None:
+        """May client `client_id` do `action` (`schemas.roles_config.Action`: "subscribe",
+        "publish", "call_service", ...) on `name`? The refusal text (naming action, name and
+        role) or None. Another protocol asks before it acts for its client, as the core does
+        before every rosbridge op; a mirror acting for a client asks with that client's id."""
+        return self._core.authorize(client_id, action, name)
+
+    def connect_client(self, receive: Receiver, peer: str = "", token: str | None = None) -> int:
+        """A client of another protocol (Foxglove) that the core treats like a websocket
+        client: it must authenticate (with `token`, checked now; a bad one is closed) and
+        gets its role's rights. What the core sends it goes to `receive`."""
+        client_id = self._core.connect(peer)
+        self._edge.internal_clients[client_id] = receive
+        self._apply(self._core.admit(client_id, time.time_ns(), token))
+        return client_id
+
+    def set_audit(self, sink: AuditSink) -> None:
+        """Where the policy writes its audit entries (`bridge.audit`, `--audit-log`)."""
+        self._core.set_audit(sink)
+
+    def principal_counters(self) -> Mapping[str, PrincipalCounters]:
+        """Messages, bytes, refusals and drops per principal (for /metrics)."""
+        return self._core.state.policy.counters
+
+    def may_read_metrics(self, authorization: str | None) -> bool:
+        """Whether an HTTP request with this `Authorization` header may read /metrics."""
+        return self._core.may_read_metrics(bearer_token(authorization), time.time_ns())
+
+    # -- gateways between graphs --------------------------------------------------------------
+
+    def claim_nodes(self, source: str, nodes: Iterable[str]) -> None:
+        """The nodes graph plug-in `source` ("dds", "zenoh") speaks for: their messages and
+        endpoints are its graph's, so it never sends them back there."""
+        self._graph_nodes[source] = frozenset(nodes)
+
+    def gateway_nodes(self, source: str) -> frozenset[str]:
+        """Nodes other graph plug-ins speak for: `source` carries their messages, endpoints
+        and services into its graph as it carries the websocket clients' (a gateway), so
+        each message crosses once and never comes back."""
+        others = [nodes for name, nodes in self._graph_nodes.items() if name != source]
+        return frozenset().union(*others)
 
     def _apply(self, effects: list[Effect]) -> None:
         if effects:

@@ -23,6 +23,7 @@ from prometheus_client import (
 )
 from prometheus_client.core import CounterMetricFamily, GaugeMetricFamily, Metric
 
+from bridge.roles import PrincipalCounters
 from bridge.tracing import TopicTraffic
 
 # Text exposition format 0.0.4, which generate_latest writes and every scraper reads.
@@ -41,6 +42,8 @@ class MetricsSnapshot:
     spans_discarded: int = 0
     # Restarts per component as `riverbridge up` reports them (schemas.supervision).
     restarts: Mapping[str, int] = field(default_factory=dict)
+    # What each principal (a token's subject) did, with --roles or --audit-log (bridge.roles).
+    principals: Mapping[str, PrincipalCounters] = field(default_factory=dict)
 
 
 def safe_label(value: str) -> str:
@@ -109,6 +112,7 @@ class SnapshotCollector:
             "Trace spans discarded because the bounded span buffer was full.",
             value=snapshot.spans_discarded,
         )
+        yield from principal_metrics(snapshot.principals)
         if snapshot.restarts:
             restarts = CounterMetricFamily(
                 "riverbridge_component_restarts",
@@ -118,6 +122,25 @@ class SnapshotCollector:
             for component, count in sorted(snapshot.restarts.items()):
                 restarts.add_metric([safe_label(component)], count)
             yield restarts
+
+
+PRINCIPAL_COUNTERS = {
+    "messages": "Messages a principal published (within its quota).",
+    "bytes": "Websocket bytes of the messages a principal published (within its quota).",
+    "refusals": "Ops of a principal its role refused.",
+    "dropped": "Messages of a principal dropped past its quota (messages/s, bytes/s).",
+}
+
+
+def principal_metrics(principals: Mapping[str, PrincipalCounters]) -> Iterator[Metric]:
+    """``riverbridge_principal_<counter>{principal=...}``, one family per counter."""
+    if not principals:
+        return
+    for counter, text in PRINCIPAL_COUNTERS.items():
+        family = CounterMetricFamily(f"riverbridge_principal_{counter}", text, labels=["principal"])
+        for principal, counters in sorted(principals.items()):
+            family.add_metric([safe_label(principal)], getattr(counters, counter))
+        yield family
 
 
 def render_metrics(snapshot: MetricsSnapshot) -> str:

@@ -23,10 +23,10 @@ from websockets.exceptions import ConnectionClosed
 from websockets.http11 import Request, Response
 from websockets.typing import Subprotocol
 
-from bridge.access import HandshakePolicy, tls_context
+from bridge.access import HandshakePolicy, handshake_token, tls_context
 from bridge.config import BridgeConfig
 from bridge.core import BridgeCore
-from bridge.effects import Close, DeadlineKey, Effect, Schedule, Send
+from bridge.effects import Close, DeadlineKey, Effect, Hold, Schedule, Send
 from bridge.http import HttpRoutes
 from bridge.intake import Intake
 from bridge.link import WRITE_HIGH_WATER, ClientLink, Delivered
@@ -79,6 +79,8 @@ class BridgeServer:
         self.internal_clients: dict[int, Callable[[Send], None]] = {}
         self.delivered: Delivered = no_observer  # told when a delivery's frames are written
         self.clients_changed: list[Callable[[], None]] = []  # after a client comes or goes
+        self._holds: dict[int, int] = {}  # client id -> read nothing of it before (ns)
+
         # Other protocols by websocket subprotocol (Foxglove's); a client offering none of
         # them speaks rosbridge v2. Their connections translate what the core sends them.
         self.protocols: dict[str, ProtocolFactory] = {}
@@ -174,6 +176,8 @@ class BridgeServer:
         if other is not None:
             self._translators[client_id] = other.outgoing
         self._tell_clients_changed()
+        token = handshake_token(ws.request) if ws.request is not None else None
+        self.apply(self.core.admit(client_id, time.time_ns(), token))
         try:
             if other is not None:
                 await self._read_other(ws, other, link, paced)
@@ -189,8 +193,10 @@ class BridgeServer:
                     or intake.in_flight > INTAKE_FRAMES
                     or intake.pending_bytes > INTAKE_BYTES
                     or link.queue.answers_waiting > ANSWER_BACKLOG
+                    or client_id in self._holds
                 ):
                     await self._between_turns(link, intake, paced)
+                    await self._held(client_id)
                     busy_s = 0.0
         except ConnectionClosed as exc:
             logger.info("client %d closed: %s", client_id, exc)
@@ -200,9 +206,16 @@ class BridgeServer:
                 other.close()
                 del self._translators[client_id]
             del self.links[client_id]
+            self._holds.pop(client_id, None)
             link.close()
             self.apply(self.core.disconnect(client_id, time.time_ns()))
             self._tell_clients_changed()
+
+    async def _held(self, client_id: int) -> None:
+        """A client past its quota (`Hold`): wait until it has room, reading nothing of it."""
+        until_ns = self._holds.pop(client_id, None)
+        if until_ns is not None:
+            await asyncio.sleep(max(0.0, (until_ns - time.time_ns()) / 1e9))
 
     async def _read_other(
         self,
@@ -211,8 +224,8 @@ class BridgeServer:
         link: ClientLink,
         paced: set[ClientLink],
     ) -> None:
-        """Frames of another protocol's client, with the same fair turns and the same pacing
-        by backed-up subscribers as a rosbridge client's."""
+        """Frames of another protocol's client, with the same fair turns, pacing by
+        backed-up subscribers and quota holds as a rosbridge client's."""
         busy_s = 0.0
         async for data in ws:
             started = time.perf_counter()
@@ -222,11 +235,17 @@ class BridgeServer:
             finally:
                 self._pacing = None
             busy_s += time.perf_counter() - started
-            if paced or busy_s > TURN_S or link.queue.answers_waiting > ANSWER_BACKLOG:
+            if (
+                paced
+                or busy_s > TURN_S
+                or link.queue.answers_waiting > ANSWER_BACKLOG
+                or link.client_id in self._holds
+            ):
                 await asyncio.sleep(0)
                 while paced:
                     await paced.pop().drained()
                 await link.answers_taken(ANSWER_BACKLOG)
+                await self._held(link.client_id)
                 busy_s = 0.0
 
     def _tell_clients_changed(self) -> None:
@@ -265,6 +284,9 @@ class BridgeServer:
                     paced.add(link)
                 elif link is None and effect.client_id in self.internal_clients:
                     self.internal_clients[effect.client_id](effect)
+            elif isinstance(effect, Hold):
+                if effect.client_id in self.links:  # an in-process client has no reads to hold
+                    self._holds[effect.client_id] = effect.until_ns
             elif isinstance(effect, Schedule):
                 self._schedule(effect.key, effect.at_ns)
             elif isinstance(effect, Close):

@@ -6,6 +6,7 @@ from dataclasses import dataclass, field
 from enum import IntEnum
 
 from bridge.problems import ProblemLog
+from bridge.roles import Grant
 from bridge.subscription import Subscription
 
 
@@ -49,6 +50,11 @@ class ClientSession:
     problems: ProblemLog = field(default_factory=ProblemLog)
     # False until a valid rosauth `auth` op when the bridge has an auth secret.
     authenticated: bool = True
+    # Who it is (a token's subject, "" until it authenticates), its role and quota buckets
+    # (bridge.roles; `grant` None: no roles file, or an in-process client, so no limits).
+    principal: str = ""
+    role: str | None = None
+    grant: Grant | None = None
     # Set once the core asked the edge to close the connection: later frames are ignored.
     closing: bool = False
 

@@ -100,6 +100,7 @@ class BridgeTelemetry:
             self._sampler.rss_bytes(),
             self.tracer.spans.discarded,
             self.restarts(),
+            dict(self._host.principal_counters()),
         )
 
     def restarts(self) -> dict[str, int]:
@@ -133,7 +134,11 @@ class BridgeTelemetry:
         }
 
     def metrics_page(self, connection: ServerConnection, request: Request) -> Response:
-        """``GET /metrics``: Prometheus text."""
+        """``GET /metrics``: Prometheus text (with the roles file's `metrics_role_only`, only
+        for `Authorization: Bearer` with a token of a role that has `metrics = true`)."""
+        if not self._host.may_read_metrics(request.headers.get("Authorization")):
+            text = "/metrics needs a bearer token of a role with metrics = true\n"
+            return respond(connection, 401, text, "text/plain; charset=utf-8")
         return respond(connection, 200, render_metrics(self.snapshot()), CONTENT_TYPE)
 
     # -- what is published -------------------------------------------------------------------

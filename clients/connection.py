@@ -37,6 +37,16 @@ AUTH_SECRET_ENV = "RIVERBRIDGE_AUTH_SECRET_FILE"
 reads the same variable as its default ``--auth-secret-file``)."""
 
 
+TOKEN_ENV = "RIVERBRIDGE_TOKEN"
+"""Environment variable holding a bridge token (`riverbridge token`): every connection then
+presents it as `Authorization: Bearer` (a bridge with `--roles` gives it the token's role)."""
+
+
+def token_from_env() -> SecretStr | None:
+    token = os.environ.get(TOKEN_ENV, "").strip()
+    return SecretStr(token) if token else None
+
+
 def auth_secret_from_env() -> SecretStr | None:
     """The secret in the file ``$RIVERBRIDGE_AUTH_SECRET_FILE`` names, or None if unset."""
     path = os.environ.get(AUTH_SECRET_ENV)
@@ -60,6 +70,8 @@ class TransportConfig(BaseModel):
     ping_timeout_s: float | None = 20.0
     auth_secret: SecretStr | None = Field(default_factory=auth_secret_from_env)
     """rosauth secret: when set, an ``auth`` op is the first frame of every connection."""
+    token: SecretStr | None = Field(default_factory=token_from_env)
+    """Bridge token (``riverbridge token``): sent as ``Authorization: Bearer`` at the handshake."""
     cafile: Path | None = None
     """For ``wss://``: trust this certificate (PEM) instead of the default store (which
     ``SSL_CERT_FILE`` may also point at)."""
@@ -85,6 +97,10 @@ async def open_once(url: str, config: TransportConfig, timeout_s: float) -> Clie
     options: dict[str, Any] = {}  # websockets refuses an explicit ssl=None for wss://
     if config.cafile is not None and url.startswith("wss:"):
         options["ssl"] = ssl.create_default_context(cafile=str(config.cafile))
+    if config.token is not None:
+        options["additional_headers"] = {
+            "Authorization": f"Bearer {config.token.get_secret_value()}"
+        }
     ws = await websockets.connect(
         url,
         **options,
@@ -96,7 +112,7 @@ async def open_once(url: str, config: TransportConfig, timeout_s: float) -> Clie
         ping_timeout=config.ping_timeout_s,
         proxy=None,
     )
-    if config.auth_secret is not None:
+    if config.auth_secret is not None and config.token is None:
         host = urllib.parse.urlsplit(url).hostname or ""
         op = rosauth.auth_op(config.auth_secret.get_secret_value(), time.time(), dest=host)
         await ws.send(json.dumps(op))

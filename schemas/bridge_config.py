@@ -17,6 +17,7 @@ from typing import Annotated, Literal
 from pydantic import BaseModel, ConfigDict, Field, SecretStr, model_validator
 
 from schemas.options import MIB, Option
+from schemas.roles_config import RolesConfig, load_roles
 from schemas.rosauth import read_secret
 
 MIN_SEND_BUFFER = 64 * 1024  # below one socket buffer's worth, healthy readers would drop
@@ -31,7 +32,10 @@ SECURITY = 'access control (docs/bridge.md, "Security and hostile input")'
 TYPES = "message types"
 DASHBOARD = "web dashboard"
 DDS = "ROS 2 over DDS (docs/ros2.md)"
-GROUPS = (NETWORK, LIMITS, SECURITY, TYPES, DASHBOARD, DDS)
+ZENOH = "ROS 2 over Zenoh, rmw_zenoh's wire format (docs/zenoh.md)"
+GROUPS = (NETWORK, LIMITS, SECURITY, TYPES, DASHBOARD, DDS, ZENOH)
+# A Zenoh endpoint: <protocol>/<address>[#<metadata>] (tcp/127.0.0.1:7447, udp/[::1]:0).
+ZENOH_ENDPOINT = r"^[a-z0-9]+/[A-Za-z0-9._:\[\]%-]+(#[A-Za-z0-9=;._-]*)?$"
 
 
 def secret_of(path: Path) -> SecretStr:
@@ -239,6 +243,63 @@ class BridgeConfig(BaseModel):
             negate=True,
         ),
     ] = True
+    # ROS 2 over Zenoh (docs/zenoh.md): with `zenoh` the bridge opens a Zenoh session (peer
+    # mode, multicast scouting off) in ROS domain `dds_domain` (`--domain`) and behaves on the
+    # wire like an rmw_zenoh node of `zenoh_distro`. It connects to `zenoh_connect` (rmw_zenoh's
+    # router on this host unless told) and listens on `zenoh_listen` (the loopback unless told).
+    zenoh: Annotated[
+        bool,
+        Option(
+            "--zenoh",
+            ZENOH,
+            "join ROS 2's Zenoh graph as an rmw_zenoh node and mirror topics and services both "
+            "ways (with --dds too: a DDS <-> Zenoh gateway)",
+            env="RIVERBRIDGE_ZENOH",
+        ),
+    ] = False
+    zenoh_listen: Annotated[
+        tuple[Annotated[str, Field(pattern=ZENOH_ENDPOINT)], ...],
+        Option(
+            "--zenoh-listen",
+            ZENOH,
+            "Zenoh endpoint to listen on, repeatable or comma-separated (default tcp/127.0.0.1:0)",
+            "ENDPOINT",
+            env="RIVERBRIDGE_ZENOH_LISTEN",
+            many="append",
+            split=",",
+        ),
+    ] = ()
+    zenoh_connect: Annotated[
+        tuple[Annotated[str, Field(pattern=ZENOH_ENDPOINT)], ...],
+        Option(
+            "--zenoh-connect",
+            ZENOH,
+            "Zenoh router or peer to connect to, repeatable or comma-separated (default "
+            "tcp/127.0.0.1:7447, rmw_zenohd's, unless --zenoh-listen is given)",
+            "ENDPOINT",
+            env="RIVERBRIDGE_ZENOH_CONNECT",
+            many="append",
+            split=",",
+        ),
+    ] = ()
+    # A Zenoh configuration file (json5) the session starts from; the options above win.
+    zenoh_config: Annotated[
+        Path | None,
+        Option(
+            "--zenoh-config",
+            ZENOH,
+            "Zenoh session configuration file (json5) to start from; --zenoh-listen and "
+            "--zenoh-connect override its endpoints",
+            "FILE",
+            env="RIVERBRIDGE_ZENOH_CONFIG",
+            exists="file",
+        ),
+    ] = None
+    # Jazzy and later put the RIHS01 type hash in keys and tokens, Humble TypeHashNotSupported.
+    zenoh_distro: Annotated[
+        Literal["humble", "jazzy", "kilted", "rolling"],
+        Option("--zenoh-distro", ZENOH, "the ROS 2 distribution whose rmw_zenoh keys to use"),
+    ] = "jazzy"
     # Access control (bridge.access, docs/bridge.md "Security and hostile input").
     # rosauth secret (first line of --auth-secret-file); None = no authentication, as ROS 2
     # rosbridge. With it, every op before a valid `auth` op is refused (protocol §1.5).
@@ -305,11 +366,62 @@ class BridgeConfig(BaseModel):
         ),
     ] = Field(default=32 * MIB, gt=0)
 
+    # Roles, tokens and audit (bridge.roles, docs/bridge.md "Roles and tokens"): who may
+    # do what, read from a TOML file (schemas.roles_config); None = everyone may do everything.
+    roles: Annotated[
+        RolesConfig | None,
+        Option(
+            "--roles",
+            SECURITY,
+            "roles file (TOML): what each role may subscribe, publish, call, advertise, and its "
+            "quotas; clients get a role from their token (config/roles.example.toml)",
+            "FILE",
+            exists="file",
+            read=load_roles,
+        ),
+    ] = None
+    # Seconds a client of a bridge that needs authentication may stay without authenticating.
+    auth_grace_s: Annotated[
+        float,
+        Option(
+            "--auth-grace",
+            SECURITY,
+            "seconds a client may stay connected without authenticating (with --auth-secret-file)",
+            "S",
+        ),
+    ] = Field(default=5.0, gt=0)
+    # JSON lines: audited publishes, calls, goals, parameter changes, refusals; rotated by size.
+    audit_log: Annotated[
+        Path | None,
+        Option(
+            "--audit-log",
+            SECURITY,
+            "append an audit trail (JSON lines, rotated by size) of calls, goals, parameter "
+            "changes, publishes on audited topics and refusals to this file",
+            "FILE",
+        ),
+    ] = None
+
     @model_validator(mode="after")
     def _tls_pair(self) -> BridgeConfig:
         if (self.certfile is None) != (self.keyfile is None):
             raise ValueError("certfile and keyfile (--certfile, --keyfile) go together")
         return self
+
+    @model_validator(mode="after")
+    def _roles_reachable(self) -> BridgeConfig:
+        roles = self.roles
+        if roles is not None and self.auth_secret is None and roles.unauthenticated_role is None:
+            raise ValueError(
+                "roles (--roles) without --auth-secret-file: nobody could authenticate; "
+                "give a secret, or name an unauthenticated_role in the roles file"
+            )
+        return self
+
+    def needs_auth(self) -> bool:
+        """Whether a websocket client must authenticate before anything else."""
+        unauthenticated = self.roles.unauthenticated_role if self.roles is not None else None
+        return self.auth_secret is not None and unauthenticated is None
 
     def action_patterns(self) -> tuple[str, ...]:
         """The globs actions must match: `actions_glob`, else `services_glob`."""

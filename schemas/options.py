@@ -62,7 +62,12 @@ class SpelledOption:
     def text_value(self, text: str) -> Any:
         """One value read from its text, bounds checked (ArgumentTypeError says why not)."""
         value = self.passed_value(text)
-        return self.option.read(value) if self.option.read is not None else value
+        if self.option.read is None:
+            return value
+        try:
+            return self.option.read(value)
+        except ValueError as exc:  # a file that does not read: its own words name the field
+            raise argparse.ArgumentTypeError(str(exc)) from None
 
     def passed_value(self, text: str) -> Any:
         """`text_value`, but a path to read stays the (checked) path: for another process."""

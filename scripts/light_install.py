@@ -25,7 +25,7 @@ import time
 from pathlib import Path
 
 CHECKOUT = Path(__file__).resolve().parents[1]
-HEAVY = ("cv2", "trimesh", "embreex", "sklearn", "scipy", "matplotlib")
+HEAVY = ("cv2", "trimesh", "embreex", "sklearn", "scipy", "matplotlib", "zenoh")
 LISTENING = re.compile(r"listening on ws://[^\s:/]+:(?P<port>\d+)")
 START_TIMEOUT_S = 60.0
 

@@ -145,9 +145,11 @@ class DdsMirror:
             self._wake.set()
 
     def local_nodes(self) -> set[str]:
-        """Nodes of the websocket clients (not the mirror's own in-process clients)."""
+        """Nodes of the websocket clients (not the mirror's own in-process clients) and, as a
+        gateway, those other graphs' plug-ins speak for (`PluginHost.gateway_nodes`)."""
         own = self.services.client_ids
-        return {s.node for s in self.host.clients().values() if s.client_id not in own}
+        clients = {s.node for s in self.host.clients().values() if s.client_id not in own}
+        return clients | self.host.gateway_nodes(EXTERNAL_SOURCE)
 
     # -- the domain's messages in ------------------------------------------------------------
 
@@ -214,6 +216,7 @@ class DdsMirror:
         self._waiting_first.clear()
         self.graph_sync.apply(self.host, remote_topics, local)
         self.host.set_external_nodes(EXTERNAL_SOURCE, self.view.announced_nodes())
+        self.host.claim_nodes(EXTERNAL_SOURCE, self._domain_nodes(remote_topics, local))
         provided = {
             name: entry.type_name
             for name, entry in graph.services.items()
@@ -223,6 +226,13 @@ class DdsMirror:
         topic_readers, topic_writers = self.topics.endpoint_guids()
         service_readers, service_writers = self.services.guids()
         self.announcer.announce(topic_readers + service_readers, topic_writers + service_writers)
+
+    def _domain_nodes(self, remote_topics: dict[str, RemoteTopic], local: set[str]) -> set[str]:
+        """The nodes this mirror speaks for: the domain's (what it injected, what it lists)."""
+        listed = {n for t in remote_topics.values() for n in (*t.publishers, *t.subscribers)}
+        injected = {node for _, node in self.graph_sync.publishers}
+        serving = {s.node for s in self.view.services().values()}
+        return (listed | injected | serving | set(self.view.announced_nodes())) - local
 
     def _wanted_topics(
         self,

@@ -16,6 +16,7 @@ import logging
 from typing import Any
 
 from bridge.effects import Send
+from bridge.errors import InvalidNameError
 from bridge.foxglove import wire
 from bridge.foxglove.assets import AssetDirectory
 from bridge.foxglove.channels import ChannelTable, published_topics
@@ -24,12 +25,22 @@ from bridge.foxglove.playback import STATE_TOPIC, PlaybackWatch
 from bridge.foxglove.session import FoxgloveSession, Permit, allow_all
 from bridge.host import PluginHost
 from bridge.problems import ProblemLog
+from schemas.roles_config import Action
 from schemas.safety import safe_text
 
 logger = logging.getLogger("bridge.foxglove")
 
 WATCH_S = 0.1  # how often the graph, parameters and player are compared with what clients know
 SERVER_NAME = "riverbridge"
+# The translator's actions (bridge.foxglove.session.Permit) as the roles' (schemas.roles_config).
+ROLE_ACTIONS = {
+    "subscribe": Action.SUBSCRIBE,
+    "publish": Action.PUBLISH,
+    "call": Action.CALL_SERVICE,
+    "playback": Action.CALL_SERVICE,
+    "get_param": Action.GET_PARAM,
+    "set_param": Action.SET_PARAM,
+}
 GRAPH_OPS = frozenset({"advertise", "unadvertise", "subscribe", "unsubscribe"})
 
 
@@ -155,18 +166,36 @@ class FoxgloveConnection:
             self.send(wire.json_frame("advertiseServices", services=services))
 
     def permit(self, action: str, name: str) -> str | None:
-        """Whether this client may do `action` on `name` (None: yes, else why not). With an
-        auth secret nothing is allowed: Foxglove's protocol has no rosauth `auth` op."""
-        session = self.host.clients().get(self.client_id)
-        if session is None or not session.authenticated:
-            return "not authenticated: this bridge needs rosauth, which Foxglove cannot send"
-        return self.plugin.permit(action, name)
+        """Whether this client may do `action` on `name` (None: yes, else why not): the
+        bridge's roles (`PluginHost.authorize`, the policy every rosbridge op passes), for
+        actions that have no role of their own (assets, the graph) being authenticated. A
+        Foxglove client authenticates with a token at the handshake (`?token=`, or
+        `Authorization: Bearer`): the protocol has no rosauth `auth` op."""
+        role_action = ROLE_ACTIONS.get(action)
+        if role_action is not None:
+            try:
+                refusal = self.host.authorize(self.client_id, role_action, name)
+            except InvalidNameError as exc:
+                refusal = str(exc)
+        else:
+            session = self.host.clients().get(self.client_id)
+            authenticated = session is not None and session.authenticated
+            refusal = None if authenticated else "not authenticated"
+        return refusal if refusal is not None else self.plugin.permit(action, name)
 
     def send(self, data: bytes, drop_key: str | None = None) -> None:
         text = data[:1] == b"{"
         self.host.deliver(self.session.frame(data, text=text, drop_key=drop_key))
 
     def receive(self, data: bytes | str) -> None:
+        """One frame of the client; a bug costs that frame (a status), never the connection."""
+        try:
+            self._receive(data)
+        except Exception as exc:
+            logger.exception("[%s] Foxglove frame failed", self.node)
+            self.send(wire.status(wire.ERROR, f"internal error: {safe_text(str(exc), 200)}"))
+
+    def _receive(self, data: bytes | str) -> None:
         reply = self.session.receive(data)
         for problem in reply.problems:
             self._log_problem(reply.op, problem)

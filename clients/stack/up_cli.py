@@ -61,6 +61,12 @@ BRIDGE_OPTIONS = (
     "dds_domain",
     "dds_interface",
     "dds_peers",
+    "roles",
+    "audit_log",
+    "zenoh",
+    "zenoh_listen",
+    "zenoh_connect",
+    "zenoh_config",
 )
 PASSED = " (passed to the bridge)"
 

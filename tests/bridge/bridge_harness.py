@@ -9,7 +9,7 @@ from typing import Any
 
 from bridge.config import BridgeConfig
 from bridge.core import BridgeCore
-from bridge.effects import Close, Effect, Schedule, Send
+from bridge.effects import Close, Effect, Hold, Schedule, Send
 from bridge.inbound import read_frame
 from bridge.outgoing import WireFrame, render
 from schemas import codec_cbor, codec_json
@@ -28,6 +28,7 @@ class CoreHarness:
         self.deadlines: dict[Any, int] = {}
         self.sends: dict[int, list[Send]] = defaultdict(list)
         self.closes: list[Close] = []
+        self.holds: list[Hold] = []  # read nothing more of a client until (bridge.roles quotas)
 
     @property
     def state(self):
@@ -76,6 +77,8 @@ class CoreHarness:
                 self.sends[effect.client_id].append(effect)
             elif isinstance(effect, Schedule):
                 self.deadlines[effect.key] = effect.at_ns
+            elif isinstance(effect, Hold):
+                self.holds.append(effect)
             else:
                 self.closes.append(effect)
 

@@ -1,0 +1,5 @@
+import sys
+
+from clients.linkemu.cli import main
+
+sys.exit(main())
