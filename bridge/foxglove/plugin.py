@@ -24,12 +24,22 @@ from bridge.foxglove.playback import STATE_TOPIC, PlaybackWatch
 from bridge.foxglove.session import FoxgloveSession, Permit, allow_all
 from bridge.host import PluginHost
 from bridge.problems import ProblemLog
+from schemas.roles_config import Action
 from schemas.safety import safe_text
 
 logger = logging.getLogger("bridge.foxglove")
 
 WATCH_S = 0.1  # how often the graph, parameters and player are compared with what clients know
 SERVER_NAME = "riverbridge"
+# The translator's actions (bridge.foxglove.session.Permit) as the roles' (schemas.roles_config).
+ROLE_ACTIONS = {
+    "subscribe": Action.SUBSCRIBE,
+    "publish": Action.PUBLISH,
+    "call": Action.CALL_SERVICE,
+    "playback": Action.CALL_SERVICE,
+    "get_param": Action.GET_PARAM,
+    "set_param": Action.SET_PARAM,
+}
 GRAPH_OPS = frozenset({"advertise", "unadvertise", "subscribe", "unsubscribe"})
 
 
@@ -187,6 +197,14 @@ class FoxgloveConnection:
         self.host.deliver(self.session.frame(data, text=text, drop_key=drop_key))
 
     def receive(self, data: bytes | str) -> None:
+        """One frame of the client; a bug costs that frame (a status), never the connection."""
+        try:
+            self._receive(data)
+        except Exception as exc:
+            logger.exception("[%s] Foxglove frame failed", self.node)
+            self.send(wire.status(wire.ERROR, f"internal error: {safe_text(str(exc), 200)}"))
+
+    def _receive(self, data: bytes | str) -> None:
         reply = self.session.receive(data)
         for problem in reply.problems:
             self._log_problem(reply.op, problem)

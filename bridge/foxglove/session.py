@@ -136,13 +136,14 @@ class FoxgloveSession:
             for channel_id in op.channel_ids:
                 self._unadvertise(channel_id, reply)
         elif isinstance(op, wire.GetParameters):
-            if not self._refusal(reply, "get_param", ",".join(op.parameter_names)):
-                reply.parameters_after = (list(op.parameter_names), op.id)
+            names = [n for n in op.parameter_names if not self._refusal(reply, "get_param", n)]
+            if names or (not op.parameter_names and not self._refusal(reply, "get_param", "")):
+                reply.parameters_after = (names, op.id)
         elif isinstance(op, wire.SetParameters):
             self._set_parameters(op, reply)
         elif isinstance(op, wire.SubscribeParameterUpdates):
-            if not self._refusal(reply, "get_param", ",".join(op.parameter_names)):
-                self.parameter_names.update(op.parameter_names)
+            names = [n for n in op.parameter_names if not self._refusal(reply, "get_param", n)]
+            self.parameter_names.update(names)
         elif isinstance(op, wire.UnsubscribeParameterUpdates):
             self.parameter_names.difference_update(op.parameter_names)
         elif isinstance(op, wire.SubscribeConnectionGraph):

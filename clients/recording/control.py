@@ -35,24 +35,33 @@ class PlaybackClock:
     anchor_s: float
     anchor_wall_ns: int
     playing: bool = True
+    held: bool = False  # after a seek, until the player has read ahead from there
 
     def position_ns(self, now_s: float) -> int:
-        if not self.playing:
+        if not self.playing or self.held:
             return self.log_ns
         return self.log_ns + round((now_s - self.anchor_s) * self.speed * NS_PER_S)
 
     def delay_s(self, log_ns: int, now_s: float) -> float | None:
-        """Seconds until `log_ns` is due (<= 0: now); None while paused."""
-        if not self.playing:
+        """Seconds until `log_ns` is due (<= 0: now); None while paused or held."""
+        if not self.playing or self.held:
             return None
         return (log_ns - self.position_ns(now_s)) / NS_PER_S / self.speed
 
     def rebase(self, log_ns: int, now_s: float, wall_ns: int) -> None:
-        """Stand at `log_ns` now (a seek, or the start of a pass)."""
+        """Stand at `log_ns` now and run from there (the start of a pass)."""
         self.log_ns, self.anchor_s, self.anchor_wall_ns = log_ns, now_s, wall_ns
+        self.held = False
+
+    def hold(self, log_ns: int, now_s: float, wall_ns: int) -> None:
+        """Stand at `log_ns` until the next `rebase` (a seek: time stays at the target while
+        the player reads ahead from there)."""
+        self.rebase(log_ns, now_s, wall_ns)
+        self.held = True
 
     def _hold(self, now_s: float, wall_ns: int) -> None:
-        self.rebase(self.position_ns(now_s), now_s, wall_ns)
+        self.log_ns = self.position_ns(now_s)
+        self.anchor_s, self.anchor_wall_ns = now_s, wall_ns
 
     def play(self, now_s: float, wall_ns: int) -> None:
         self._hold(now_s, wall_ns)

@@ -279,7 +279,7 @@ class Player:
             first, last = self.window_ns
             target = min(max(control.stamp_ns(request.get("seek_time")), first), last)
             self._seek_ns = target
-            self.clock.rebase(target, now_s, wall_ns)
+            self.clock.hold(target, now_s, wall_ns)  # until the pass has read ahead from there
             self.ended = False
         self.clock.set_speed(float(request.get("speed") or 0.0), now_s, wall_ns)
         if request.get("play", True):
@@ -290,8 +290,9 @@ class Player:
         log.info("playback control: %s", self._state_text())
         await self._publish_state()
         state = self.state()
+        asked = control.PLAYING if self.clock.playing else control.PAUSED
         return {
-            "status": state["status"],
+            "status": control.ENDED if self.ended else asked,
             "current_time": state["current_time"],
             "speed": state["speed"],
             "did_seek": did_seek,
@@ -303,6 +304,8 @@ class Player:
         position = self.clock.position_ns(asyncio.get_running_loop().time())
         if self.ended:
             status = control.ENDED
+        elif self.clock.held and self.clock.playing:
+            status = control.BUFFERING
         else:
             status = control.PLAYING if self.clock.playing else control.PAUSED
         return {

@@ -8,6 +8,7 @@ import asyncio
 import contextlib
 import json
 import ssl
+import time
 from pathlib import Path
 from typing import Any
 
@@ -19,11 +20,16 @@ from websockets.exceptions import InvalidStatus
 
 from bridge.compose import run_bridge
 from bridge.config import BridgeConfig
+from schemas.roles_config import load_roles
+from schemas.tokens import issue
+from tests.child_process import REPO_ROOT
 from tests.tls_certificates import make_certificate
 
 pytestmark = pytest.mark.timeout(60)
 
 FOXGLOVE = "foxglove.websocket.v1"
+SECRET = "s3cret-for-the-foxglove-tests"
+WRENCH = "geometry_msgs/msg/Wrench"
 
 
 async def next_json(ws: Any, op: str) -> dict[str, Any]:
@@ -73,9 +79,8 @@ async def test_the_client_limit_counts_foxglove_clients() -> None:
         assert refused.value.response.status_code == 503
 
 
-async def test_with_an_auth_secret_a_foxglove_client_may_do_nothing() -> None:
-    """Foxglove's protocol has no rosauth op: without a token at the handshake, refused."""
-    config = BridgeConfig(port=0, auth_secret=SecretStr("s3cret"))
+async def test_a_foxglove_client_without_a_token_may_do_nothing() -> None:
+    config = BridgeConfig(port=0, auth_secret=SecretStr(SECRET))
     async with (
         run_bridge(config) as bridge,
         websockets.connect(bridge.url, subprotocols=[FOXGLOVE]) as ws,
@@ -86,6 +91,41 @@ async def test_with_an_auth_secret_a_foxglove_client_may_do_nothing() -> None:
         await ws.send(orjson.dumps(request).decode())
         status = await next_json(ws, "status")
         assert status["level"] == 2 and "not authenticated" in status["message"]
+
+
+async def test_a_foxglove_client_gets_the_rights_of_its_tokens_role() -> None:
+    """The roles every rosbridge op passes: an observer's token (in the URL, as a browser
+    app sends it) lets it subscribe and read parameters, not publish or set them."""
+    roles = load_roles(REPO_ROOT / "config" / "roles.example.toml")
+    config = BridgeConfig(port=0, auth_secret=SecretStr(SECRET), roles=roles)
+    token = issue(SECRET, "observer", "foxglove-test", time.time(), 60.0)
+    async with (
+        run_bridge(config) as bridge,
+        websockets.connect(f"{bridge.url}/?token={token}", subprotocols=[FOXGLOVE]) as ws,
+    ):
+        channels = (await next_json(ws, "advertise"))["channels"]
+        rosout = next(c for c in channels if c["topic"] == "/rosout")
+        frames = [
+            {"op": "subscribe", "subscriptions": [{"id": 1, "channelId": rosout["id"]}]},
+            {"op": "getParameters", "parameterNames": ["/a:b"], "id": "g"},
+            {"op": "setParameters", "parameters": [{"name": "/a:b", "value": 1}], "id": "s"},
+            {
+                "op": "advertise",
+                "channels": [
+                    {"id": 1, "topic": "/cmd_wrench", "encoding": "cdr", "schemaName": WRENCH}
+                ],
+            },
+        ]
+        for frame in frames:
+            await ws.send(orjson.dumps(frame).decode())
+        assert (await next_json(ws, "parameterValues"))["id"] == "g"
+        refusals = [(await next_json(ws, "status"))["message"] for _ in range(2)]
+        assert refusals == [
+            "set_param /a:b: role observer may not set param /a:b",
+            "publish /cmd_wrench: role observer may not publish /cmd_wrench",
+        ]
+        session = next(iter(bridge.core.state.sessions.values()))
+        assert "/rosout" in session.subscriptions  # the subscription was allowed
 
 
 async def test_a_foxglove_client_that_stops_reading_loses_its_oldest(tmp_path: Path) -> None:

@@ -42,3 +42,14 @@ def test_shifted_stamps_keep_their_distance_to_the_log_time_on_todays_clock() ->
     clock = PlaybackClock(speed=2.0, log_ns=START_NS, anchor_s=0.0, anchor_wall_ns=wall_ns)
     # captured 10 ms before the anchor's log time: 5 ms before the anchor at twice the speed
     assert clock.shifted(START_NS - 10_000_000) == wall_ns - 5_000_000
+
+
+def test_a_seek_holds_time_at_its_target_until_the_pass_starts_there() -> None:
+    clock = PlaybackClock(speed=1.0, log_ns=START_NS, anchor_s=0.0, anchor_wall_ns=0)
+    target = START_NS + 30 * NS_PER_S
+    clock.hold(target, 1.0, NS_PER_S)
+    clock.play(1.5, NS_PER_S)  # a play with the seek: still held while reading ahead
+    assert clock.position_ns(5.0) == target
+    assert clock.delay_s(target, 5.0) is None
+    clock.rebase(target, 5.0, 5 * NS_PER_S)  # the pass has its first messages
+    assert clock.position_ns(6.0) == target + NS_PER_S
