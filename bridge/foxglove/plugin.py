@@ -140,18 +140,6 @@ class FoxglovePlugin:
         return wire.json_frame("serverInfo", **fields)
 
 
-# Foxglove client actions checked against the client's role (schemas.roles_config.Action);
-# fetching assets and reading the connection graph are open to every authenticated client.
-ROLE_ACTIONS = {
-    "subscribe": "subscribe",
-    "publish": "publish",
-    "call": "call_service",
-    "get_param": "get_param",
-    "set_param": "set_param",
-    "playback": "call_service",
-}
-
-
 class FoxgloveConnection:
     """One Foxglove client: runs its session's ops as core calls, sends its frames."""
 
