@@ -260,7 +260,8 @@ class Policy:
             return Refusal(f"{op_name} {asked.name} refused: role {grant.role_name} {over}")
         if op_name == "publish" and not within_quota(grant, wire, now_ns):
             return Refusal(
-                f"publish {asked.name} dropped: {session.principal} is over the quota of role "
+                f"publish {asked.name} dropped: {session.principal or ANONYMOUS} is over the "
+                f"quota of role "
                 f"{grant.role_name}",
                 quota=True,
                 retry_ns=quota_ready_ns(grant, wire, now_ns),

@@ -35,7 +35,9 @@ def secret_file(tmp_path: Path) -> Path:
 
 @pytest.fixture
 def secured_bridge(secret_file: Path) -> Iterator[BridgeEndpoint]:
-    with running_bridge(["--auth-secret-file", str(secret_file)]) as endpoint:
+    # A long grace: these clients may take their time (closing the silent ones: test_roles).
+    args = ["--auth-secret-file", str(secret_file), "--auth-grace", "60"]
+    with running_bridge(args) as endpoint:
         yield endpoint
         assert "Traceback" not in endpoint.log.text()
 
