@@ -27,6 +27,7 @@ import logging
 from collections.abc import Callable
 from typing import TYPE_CHECKING
 
+from bridge.dds.action_mirror import ActionMirror
 from bridge.dds.announce import Announcer
 from bridge.dds.cyclone_xml import CycloneSettings
 from bridge.dds.discovery import (
@@ -115,6 +116,7 @@ class DdsMirror:
         dds = DdsPlumbing(self.participant, self.pump, self.outbox, self.registry)
         self.topics = TopicMirror(dds, lambda arrivals: to_loop(self._inject, arrivals))
         self.services = ServiceMirror(self.host, dds, self.node, to_loop)
+        self.actions = ActionMirror(self.host, self.node, self.services.client_ids)
         self.announcer = Announcer(dds, self.node, lambda p, n: to_loop(self._nodes_seen, p, n))
         for condition in self.participant.discovery_conditions:
             self.pump.watch(condition, self._take_discovery)
@@ -127,6 +129,7 @@ class DdsMirror:
         self.host.remove_sink(self)
         self.pump.stop()
         self.writer.stop()
+        self.actions.close()
         self.services.close()
         self.topics.close()
         self.announcer.close()
@@ -220,6 +223,7 @@ class DdsMirror:
             if entry.provider in local and entry.type_name
         }
         self.services.sync(provided, self.view.services())
+        self.actions.sync(self.view.actions(), set(self.services.clients))
         topic_readers, topic_writers = self.topics.endpoint_guids()
         service_readers, service_writers = self.services.guids()
         self.announcer.announce(topic_readers + service_readers, topic_writers + service_writers)
@@ -238,7 +242,7 @@ class DdsMirror:
             if publishing:
                 profiles = [self._advertised(entry, node) for node in publishing]
                 writers[entry.name] = Wanted(entry.type_name, strongest(profiles))
-            if any(node in local for node in entry.subscribers):
+            if any(node in local or node == self.actions.node for node in entry.subscribers):
                 seen = remote.get(entry.name)
                 offered = [p for ps in seen.publishers.values() for p in ps] if seen else []
                 readers[entry.name] = Wanted(entry.type_name, reader_profile(offered))

@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import itertools
 import logging
+import threading
+from collections import deque
 from collections.abc import Callable
 
 from bridge.dds import request_header
@@ -44,8 +46,10 @@ class _ServiceEndpoints:
         type_name: str,
         is_server: bool,
         received: Received,
+        request_header: bool = True,
     ) -> None:
         participant, registry = dds.participant, dds.registry
+        self.request_header = request_header
         spec = registry.service(type_name)
         self.service = service
         self.type_name = spec.name
@@ -61,6 +65,7 @@ class _ServiceEndpoints:
             + ";"
         )
         types = participant.types
+        part_type = types.service_part if request_header else types.message
         write_topic, read_topic = (
             (reply_topic(service), request_topic(service))
             if is_server
@@ -68,13 +73,13 @@ class _ServiceEndpoints:
         )
         self.writer: RawWriter = participant.writer(
             write_topic,
-            types.service_part(outgoing),
+            part_type(outgoing),
             SERVICES,
             key + type_hash_user_data(registry, outgoing.name),
         )
         self.reader: RawReader = participant.reader(
             read_topic,
-            types.service_part(incoming),
+            part_type(incoming),
             SERVICES,
             key + type_hash_user_data(registry, incoming.name),
         )
@@ -84,7 +89,9 @@ class _ServiceEndpoints:
         """Queue a request or reply (serialized and written on the writer thread)."""
 
         def write() -> None:
-            cdr = request_header.wrap(to_cdr(self._dds.registry, self._outgoing, msg), request)
+            cdr = to_cdr(self._dds.registry, self._outgoing, msg)
+            if self.request_header:
+                cdr = request_header.wrap(cdr, request)
             result = self.writer.write(cdr)
             if result < 0:
                 logger.warning("DDS: write for service %s failed (%d)", self.service, result)
@@ -102,8 +109,8 @@ class _ServiceEndpoints:
         def decode() -> None:
             for sample in samples:
                 try:
-                    request, cdr = request_header.unwrap(sample.data)
-                    if self.accepts(request):
+                    request, cdr = self._unwrap(sample.data)
+                    if request is not None and self.accepts(request):
                         self._received(
                             self.service, request, from_cdr(self._dds.registry, self._incoming, cdr)
                         )
@@ -111,6 +118,9 @@ class _ServiceEndpoints:
                     logger.warning("DDS: dropped a sample of service %s: %s", self.service, exc)
 
         return decode
+
+    def _unwrap(self, sample: bytes) -> tuple[RequestId | None, bytes]:
+        return request_header.unwrap(sample)
 
     def guids(self) -> tuple[bytes, bytes]:
         """(reader GUID, writer GUID)."""
@@ -131,12 +141,19 @@ class ServiceServer(_ServiceEndpoints):
         service: str,
         type_name: str,
         on_request: Received,
+        request_header: bool = True,
     ) -> None:
-        super().__init__(dds, service, type_name, True, on_request)
+        super().__init__(dds, service, type_name, True, on_request, request_header)
 
 
 class ServiceClient(_ServiceEndpoints):
-    """A remote server's service used by local callers: requests out, own replies in."""
+    """A remote server's service used by local callers: requests out, own replies in.
+
+    Towards a Fast DDS server (`request_header=False`) the request id travels in RTPS inline
+    QoS, which Cyclone neither writes nor reads: requests then go one at a time and a reply
+    answers the request in flight. A reply the server sends to another client of the same
+    service at that moment would be taken for ours (documented in docs/ros2.md).
+    """
 
     def __init__(
         self,
@@ -144,15 +161,43 @@ class ServiceClient(_ServiceEndpoints):
         service: str,
         type_name: str,
         on_reply: Received,
+        request_header: bool = True,
     ) -> None:
-        super().__init__(dds, service, type_name, False, on_reply)
+        super().__init__(dds, service, type_name, False, on_reply, request_header)
         self._sequence = itertools.count(1)
+        self._lock = threading.Lock()  # requests come from the loop, replies on the pump
+        self._in_flight: RequestId | None = None
+        self._queued: deque[tuple[RequestId, Message]] = deque()
 
     def request(self, msg: Message) -> RequestId:
         """Send a request; its reply comes back with the returned id."""
         request = RequestId(self.writer.instance_handle, next(self._sequence))
+        if self.request_header:
+            self.send(request, msg)
+            return request
+        with self._lock:
+            if self._in_flight is not None:
+                self._queued.append((request, msg))
+                return request
+            self._in_flight = request
         self.send(request, msg)
         return request
+
+    def _unwrap(self, sample: bytes) -> tuple[RequestId | None, bytes]:
+        if self.request_header:
+            return request_header.unwrap(sample)
+        with self._lock:
+            answered = self._in_flight
+        if answered is not None:
+            self._next()
+        return answered, sample
+
+    def _next(self) -> None:
+        with self._lock:
+            following = self._queued.popleft() if self._queued else None
+            self._in_flight = following[0] if following else None
+        if following is not None:
+            self.send(*following)
 
     def accepts(self, request: RequestId) -> bool:
         """Replies go to every client of a service; keep those answering our requests."""

@@ -1,0 +1,128 @@
+"""The bridge in a graph of real ROS 2 nodes: rclpy from PyPI (Jazzy and Kilted wheels, on
+rmw_fastrtps_cpp, Fast DDS) on one loopback domain with `riverbridge bridge --dds` (Cyclone).
+
+One rclpy process per distribution serves the whole module (tests/dds/ros2_nodes/rclpy_node.py);
+each test starts its own bridge on that domain.
+"""
+
+from __future__ import annotations
+
+import asyncio
+
+import pytest
+
+from bridge.compose import run_bridge
+from bridge.config import BridgeConfig
+from clients import RosbridgeClient
+from clients.errors import ActionError
+from tests.dds.conftest import take_domain
+from tests.dds.rclpy_env import DISTROS, rclpy_script
+
+pytestmark = pytest.mark.slow
+
+DISCOVERY_TIMEOUT_S = 30.0
+GOAL_CANCELED = 5  # action_msgs/msg/GoalStatus
+# Known gap (docs/ros2.md): Kilted's Fast DDS 3 answers no service request of the bridge yet
+# (its topics cross; its type objects are refused by Cyclone as invalid); Jazzy's do.
+KILTED_SERVICES = "Kilted (Fast DDS 3) services do not answer Cyclone requests yet"
+
+
+@pytest.fixture(scope="module", params=DISTROS)
+def ros2_node(request):
+    """(distro, domain id, the running rclpy node) shared by the module's tests."""
+    domain = take_domain()
+    with rclpy_script(request.param, domain, "rclpy_node.py", "rb_test_node") as node:
+        yield request.param, domain, node
+
+
+async def first(subscription, predicate, timeout_s: float = DISCOVERY_TIMEOUT_S):
+    """The first message of `subscription` for which `predicate(msg)` holds."""
+    async with asyncio.timeout(timeout_s):
+        async for item in subscription:
+            if predicate(item.msg):
+                return item.msg
+    raise AssertionError("subscription ended")
+
+
+def bridge_config(domain: int) -> BridgeConfig:
+    return BridgeConfig(host="127.0.0.1", port=0, dds=True, dds_domain=domain)
+
+
+async def test_strings_cross_both_ways(ros2_node, registry):
+    distro, domain, node = ros2_node
+    async with (
+        run_bridge(bridge_config(domain)) as bridge,
+        RosbridgeClient(bridge.url, registry=registry) as client,
+    ):
+        chatter = await client.subscribe("/ros_chatter", "std_msgs/msg/String")
+        heard = await first(chatter, lambda m: m["data"].startswith("hello "))
+        echoes = await client.subscribe("/from_ros", "std_msgs/msg/String")
+        await client.advertise("/to_ros", "std_msgs/msg/String")
+
+        async def keep_sending() -> None:
+            n = 0
+            while True:  # until the node's subscription is matched; the test waits for it
+                n += 1
+                await client.publish("/to_ros", {"data": f"from {distro} {n}"})
+                await asyncio.sleep(0.2)
+
+        sender = asyncio.create_task(keep_sending())
+        try:
+            echo = await first(echoes, lambda m: m["data"].startswith(f"echo: from {distro}"))
+        finally:
+            sender.cancel()
+    assert heard["data"].startswith("hello ")
+    assert echo["data"].startswith(f"echo: from {distro} "), node.output()
+
+
+async def test_a_best_effort_publisher_is_read_with_default_options(ros2_node, registry):
+    """rclpy's sensor-data QoS (best effort): a subscribe without any QoS still gets it."""
+    _, domain, node = ros2_node
+    async with (
+        run_bridge(bridge_config(domain)) as bridge,
+        RosbridgeClient(bridge.url, registry=registry) as client,
+    ):
+        sensor = await client.subscribe("/sensor_be", "std_msgs/msg/String")
+        first_msg = await first(sensor, lambda m: m["data"].startswith("sensor "))
+        second = await first(sensor, lambda m: m["data"] != first_msg["data"])
+    assert second["data"].startswith("sensor "), node.output()
+
+
+async def wait_for_action(client, action: str, timeout_s: float = DISCOVERY_TIMEOUT_S) -> None:
+    """Until rosapi lists `action` (the bridge has discovered its server)."""
+    async with asyncio.timeout(timeout_s):
+        while True:
+            listed = await client.call_service("/rosapi/action_servers", {})
+            if action in listed["action_servers"]:
+                return
+            await asyncio.sleep(0.2)
+
+
+async def test_an_rclpy_action_server_serves_goals_feedback_and_cancel(
+    ros2_node, registry, request
+):
+    """riverbridge's own client drives rclpy's ActionServer (test_msgs/action/Fibonacci)."""
+    distro, domain, node = ros2_node
+    if distro == "kilted":
+        request.applymarker(pytest.mark.xfail(reason=KILTED_SERVICES, strict=True))
+    async with (
+        run_bridge(bridge_config(domain)) as bridge,
+        RosbridgeClient(bridge.url, registry=registry) as client,
+    ):
+        await wait_for_action(client, "/fibonacci")
+        goal = await client.send_action_goal(
+            "/fibonacci", "test_msgs/action/Fibonacci", {"order": 5}
+        )
+        feedback = [list(values["sequence"]) async for values in goal.feedback()]
+        result = await goal.result()
+        long_goal = await client.send_action_goal(
+            "/fibonacci", "test_msgs/action/Fibonacci", {"order": 40}
+        )
+        async for _ in long_goal.feedback():
+            await long_goal.cancel()
+            break
+        with pytest.raises(ActionError) as canceled:
+            await long_goal.result()
+    assert list(result["sequence"]) == [0, 1, 1, 2, 3, 5], node.output()
+    assert feedback[-1] == [0, 1, 1, 2, 3, 5] and feedback[0] == [0, 1, 1]
+    assert canceled.value.status == GOAL_CANCELED
