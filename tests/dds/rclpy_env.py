@@ -16,6 +16,7 @@ from contextlib import contextmanager
 from pathlib import Path
 
 NODES = Path(__file__).resolve().parent / "ros2_nodes"
+KILTED_PROFILE = Path(__file__).resolve().parents[2] / "docs" / "fastdds-kilted-profile.xml"
 # Where scripts/setup.sh puts the venvs (outside the checkout, so every clone shares them).
 VENVS = Path(os.environ.get("RIVERBRIDGE_ROS2_VENVS", Path.home() / ".cache" / "riverbridge"))
 DISTROS = ("jazzy", "kilted")
@@ -32,9 +33,14 @@ def ros2_python(distro: str) -> Path:
     return python
 
 
-def ros2_env(domain: int) -> dict[str, str]:
-    """What a ROS 2 node of the tests needs: nothing of the test's own Python environment."""
-    return {
+def ros2_env(distro: str, domain: int) -> dict[str, str]:
+    """What a ROS 2 node of the tests needs: nothing of the test's own Python environment.
+
+    Kilted's Fast DDS 3 takes docs/fastdds-kilted-profile.xml, as docs/ros2.md tells users:
+    its XTypes type objects are refused by Cyclone, so it must announce types by name only.
+    """
+    profile = {"FASTDDS_DEFAULT_PROFILES_FILE": str(KILTED_PROFILE)} if distro == "kilted" else {}
+    return profile | {
         "PATH": "/usr/bin:/bin",
         "HOME": str(Path.home()),
         "ROS_DOMAIN_ID": str(domain),
@@ -88,7 +94,7 @@ def rclpy_script(distro: str, domain: int, script: str, *args: str) -> Iterator[
     started = time.monotonic()
     process = subprocess.Popen(
         [str(ros2_python(distro)), str(NODES / script), *args],
-        env=ros2_env(domain),
+        env=ros2_env(distro, domain),
         stdout=subprocess.PIPE,
         stderr=subprocess.STDOUT,
         text=True,

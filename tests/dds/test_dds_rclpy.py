@@ -22,9 +22,6 @@ pytestmark = pytest.mark.slow
 
 DISCOVERY_TIMEOUT_S = 30.0
 GOAL_CANCELED = 5  # action_msgs/msg/GoalStatus
-# Known gap (docs/ros2.md): Kilted's Fast DDS 3 answers no service request of the bridge yet
-# (its topics cross; its type objects are refused by Cyclone as invalid); Jazzy's do.
-KILTED_SERVICES = "Kilted (Fast DDS 3) services do not answer Cyclone requests yet"
 
 
 @pytest.fixture(scope="module", params=DISTROS)
@@ -98,13 +95,9 @@ async def wait_for_action(client, action: str, timeout_s: float = DISCOVERY_TIME
             await asyncio.sleep(0.2)
 
 
-async def test_an_rclpy_action_server_serves_goals_feedback_and_cancel(
-    ros2_node, registry, request
-):
+async def test_an_rclpy_action_server_serves_goals_feedback_and_cancel(ros2_node, registry):
     """riverbridge's own client drives rclpy's ActionServer (test_msgs/action/Fibonacci)."""
-    distro, domain, node = ros2_node
-    if distro == "kilted":
-        request.applymarker(pytest.mark.xfail(reason=KILTED_SERVICES, strict=True))
+    _, domain, node = ros2_node
     async with (
         run_bridge(bridge_config(domain)) as bridge,
         RosbridgeClient(bridge.url, registry=registry) as client,
