@@ -119,3 +119,33 @@ async def test_an_rclpy_action_server_serves_goals_feedback_and_cancel(ros2_node
     assert list(result["sequence"]) == [0, 1, 1, 2, 3, 5], node.output()
     assert feedback[-1] == [0, 1, 1, 2, 3, 5] and feedback[0] == [0, 1, 1]
     assert canceled.value.status == GOAL_CANCELED
+
+
+async def wait_for_service(client, service: str, timeout_s: float = DISCOVERY_TIMEOUT_S) -> None:
+    async with asyncio.timeout(timeout_s):
+        while service not in (await client.call_service("/rosapi/services", {}))["services"]:
+            await asyncio.sleep(0.2)
+
+
+async def test_rclpy_node_parameters_are_read_and_set_through_rosapi(ros2_node, registry):
+    """rosapi's `node_name:param_name` against the node's rcl_interfaces services; the node
+    itself then reads the new value (it publishes what `get_parameter` returns)."""
+    _, domain, node = ros2_node
+    async with (
+        run_bridge(bridge_config(domain)) as bridge,
+        RosbridgeClient(bridge.url, registry=registry) as client,
+    ):
+        await wait_for_service(client, "/rb_test_node/set_parameters")
+        seen = await client.subscribe("/param_seen", "std_msgs/msg/String")
+        gain = await client.call_service("/rosapi/get_param", {"name": "/rb_test_node:gain"})
+        label = await client.call_service("/rosapi/get_param", {"name": "rb_test_node:label"})
+        absent = await client.call_service("/rosapi/has_param", {"name": "/rb_test_node:nope"})
+        changed = await client.call_service(
+            "/rosapi/set_param", {"name": "/rb_test_node:gain", "value": "2.5"}
+        )
+        node_saw = await first(seen, lambda m: m["data"].startswith("gain="))
+        again = await client.call_service("/rosapi/get_param", {"name": "/rb_test_node:gain"})
+    assert gain == {"value": "1.5", "successful": True, "reason": ""}, node.output()
+    assert label["value"] == '"riverbridge"' and absent == {"exists": False}
+    assert changed == {"successful": True, "reason": ""}
+    assert node_saw["data"] == "gain=2.5" and again["value"] == "2.5"

@@ -11,8 +11,8 @@ It offers, at once, so one process serves a whole test module:
 - `/sensor_be` (std_msgs/msg/String, best effort keep-last 5, rclpy's `qos_profile_sensor_data`):
   "sensor <n>" at 10 Hz;
 - parameters `gain` (double 1.5), `label` (string "riverbridge"), `enabled` (bool true); a
-  parameter set from outside is published as "<name>=<value>" on `/param_seen`, the value
-  the node itself reads back with `get_parameter`;
+  parameter set from outside is published as "<name>=<value>" on `/param_seen`
+  (transient local), the value the node itself reads back with `get_parameter`;
 - the action `/fibonacci` (test_msgs/action/Fibonacci): one feedback per step every 0.1 s,
   cancel honoured.
 Prints "READY" once everything exists. Stops on SIGINT/SIGTERM.
@@ -30,7 +30,7 @@ from rcl_interfaces.msg import SetParametersResult
 from rclpy.action import ActionServer, CancelResponse, GoalResponse
 from rclpy.executors import MultiThreadedExecutor
 from rclpy.node import Node
-from rclpy.qos import qos_profile_sensor_data
+from rclpy.qos import DurabilityPolicy, QoSProfile, qos_profile_sensor_data
 from std_msgs.msg import String
 from test_msgs.action import Fibonacci
 
@@ -43,7 +43,9 @@ class TestNode(Node):
         self.echo = self.create_publisher(String, "/from_ros", 10)
         self.chatter = self.create_publisher(String, "/ros_chatter", 10)
         self.sensor = self.create_publisher(String, "/sensor_be", qos_profile_sensor_data)
-        self.seen = self.create_publisher(String, "/param_seen", 10)
+        # transient local: a subscriber matched after the change still reads it
+        latched = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+        self.seen = self.create_publisher(String, "/param_seen", latched)
         self.create_subscription(String, "/to_ros", self._echo, 10)
         self.declare_parameter("gain", 1.5)
         self.declare_parameter("label", "riverbridge")
