@@ -8,13 +8,16 @@ each test starts its own bridge on that domain.
 from __future__ import annotations
 
 import asyncio
+import time
 
 import pytest
+import roslibpy
 
 from bridge.compose import run_bridge
 from bridge.config import BridgeConfig
 from clients import RosbridgeClient
 from clients.errors import ActionError
+from tests.compat import roslibpy_support as rp
 from tests.dds.conftest import take_domain
 from tests.dds.rclpy_env import DISTROS, rclpy_script
 
@@ -149,3 +152,46 @@ async def test_rclpy_node_parameters_are_read_and_set_through_rosapi(ros2_node, 
     assert label["value"] == '"riverbridge"' and absent == {"exists": False}
     assert changed == {"successful": True, "reason": ""}
     assert node_saw["data"] == "gain=2.5" and again["value"] == "2.5"
+
+
+def roslibpy_fibonacci(host: str, port: int) -> dict:
+    """roslibpy's ActionClient (PyPI): one goal to the end, one cancelled, two refused."""
+    with rp.connected(host, port) as ros:
+        client = roslibpy.ActionClient(ros, "/fibonacci", "test_msgs/action/Fibonacci")
+        feedback, results, errors = rp.Inbox(), rp.Inbox(), rp.Inbox()
+        client.send_goal(roslibpy.Goal({"order": 4}), results, feedback, errors)
+        [done] = results.expect(1, timeout_s=DISCOVERY_TIMEOUT_S)
+        canceled = rp.Inbox()
+        goal_id = client.send_goal(roslibpy.Goal({"order": 40}), canceled, rp.Inbox(), errors)
+        time.sleep(0.3)  # a goal under way; the result says whether the cancel reached it
+        client.cancel_goal(goal_id)
+        [stopped] = canceled.expect(1, timeout_s=DISCOVERY_TIMEOUT_S)
+        unknown = roslibpy.ActionClient(ros, "/no_such_action", "test_msgs/action/Fibonacci")
+        unknown.send_goal(roslibpy.Goal({"order": 2}), rp.Inbox(), rp.Inbox(), errors)
+        mismatch = roslibpy.ActionClient(ros, "/fibonacci", "example_interfaces/action/Fibonacci")
+        mismatch.send_goal(roslibpy.Goal({"order": 2}), rp.Inbox(), rp.Inbox(), errors)
+        refused = errors.expect(2, timeout_s=DISCOVERY_TIMEOUT_S)
+    return {
+        "done": done,
+        "feedback": [list(f["sequence"]) for f in feedback.snapshot()],
+        "stopped": stopped,
+        "refused": sorted(str(error["values"]) for error in refused),
+    }
+
+
+async def test_roslibpy_drives_the_rclpy_action_server(ros2_node, registry):
+    _, domain, node = ros2_node
+    async with (
+        run_bridge(bridge_config(domain)) as bridge,
+        RosbridgeClient(bridge.url, registry=registry) as client,
+    ):
+        await wait_for_action(client, "/fibonacci")
+        outcome = await asyncio.to_thread(roslibpy_fibonacci, "127.0.0.1", bridge.port)
+    assert outcome["done"]["values"] == {"sequence": [0, 1, 1, 2, 3]}, node.output()
+    assert outcome["done"]["status"] == roslibpy.core.GoalStatus.SUCCEEDED
+    assert outcome["feedback"] == [[0, 1, 1], [0, 1, 1, 2], [0, 1, 1, 2, 3]]
+    assert outcome["stopped"]["status"] == roslibpy.core.GoalStatus.CANCELED
+    assert outcome["refused"] == [
+        "Action /fibonacci is test_msgs/action/Fibonacci, not example_interfaces/action/Fibonacci",
+        "Action /no_such_action does not exist",
+    ]
