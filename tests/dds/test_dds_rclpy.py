@@ -18,6 +18,7 @@ from bridge.config import BridgeConfig
 from clients import RosbridgeClient
 from clients.errors import ActionError
 from tests.compat import roslibpy_support as rp
+from tests.compat.node_runner import run_scenario
 from tests.dds.conftest import take_domain
 from tests.dds.rclpy_env import DISTROS, rclpy_script
 
@@ -195,3 +196,22 @@ async def test_roslibpy_drives_the_rclpy_action_server(ros2_node, registry):
         "Action /fibonacci is test_msgs/action/Fibonacci, not example_interfaces/action/Fibonacci",
         "Action /no_such_action does not exist",
     ]
+
+
+async def test_roslibjs_drives_the_rclpy_action_server(ros2_node, registry):
+    _, domain, node = ros2_node
+    async with (
+        run_bridge(bridge_config(domain)) as bridge,
+        RosbridgeClient(bridge.url, registry=registry) as client,
+    ):
+        await wait_for_action(client, "/fibonacci")
+        outcome = await asyncio.to_thread(
+            run_scenario,
+            "action_client.mjs",
+            bridge.url,
+            "/fibonacci",
+            "test_msgs/action/Fibonacci",
+        )
+    assert outcome["result"] == {"sequence": [0, 1, 1, 2, 3, 5]}, node.output()
+    assert [f["sequence"] for f in outcome["feedback"]][-1] == [0, 1, 1, 2, 3, 5]
+    assert outcome["canceled"].startswith("GoalError: Action was canceled")
