@@ -40,7 +40,13 @@ from bridge.dds.discovery import (
 from bridge.dds.graph_sync import GraphSync
 from bridge.dds.outbox import Outbox, WriterThread
 from bridge.dds.participant import DdsParticipant, DdsPlumbing, Pump
-from bridge.dds.qos import QosProfile, advertised_profile, reader_profile, strongest
+from bridge.dds.qos import (
+    QosError,
+    QosProfile,
+    advertised_profile,
+    reader_profile,
+    strongest,
+)
 from bridge.dds.service_mirror import ServiceMirror
 from bridge.dds.topic_mirror import Arrival, TopicMirror, Wanted
 from bridge.errors import BridgeError, DdsStartError
@@ -245,8 +251,23 @@ class DdsMirror:
             if any(node in local or node == self.actions.node for node in entry.subscribers):
                 seen = remote.get(entry.name)
                 offered = [p for ps in seen.publishers.values() for p in ps] if seen else []
-                readers[entry.name] = Wanted(entry.type_name, reader_profile(offered))
+                readers[entry.name] = Wanted(entry.type_name, self._reading(entry, offered))
         return writers, readers
+
+    def _reading(self, entry: TopicEntry, offered: list[QosProfile]) -> QosProfile:
+        """The reader profile: adapted to the writers, or as the subscribers' `qos` asks."""
+        try:
+            return reader_profile(offered, entry.subscriber_qos.values())
+        except QosError as exc:
+            if (entry.name, "subscribe") not in self._qos_warned:
+                self._qos_warned.add((entry.name, "subscribe"))
+                logger.warning(
+                    "[%s] op=subscribe topic=%s: %s; the DDS reader adapts to the writers",
+                    ", ".join(sorted(entry.subscriber_qos)),
+                    entry.name,
+                    exc,
+                )
+            return reader_profile(offered)
 
     def _advertised(self, entry: TopicEntry, node: str) -> QosProfile:
         profile, problem = advertised_profile(node in entry.latching, entry.qos.get(node))

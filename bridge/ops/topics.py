@@ -149,6 +149,8 @@ def handle_subscribe(ctx: Context, session: ClientSession, op: Subscribe) -> Non
         ctx.state.topic_subscriptions.setdefault(name, {})[session.client_id] = subscription
         graph.add_subscriber(name, session.node)
     subscription.spelling = op.topic
+    if op.qos:
+        entry.subscriber_qos[session.node] = op.qos
     settings = subscribe_settings(op)
     if settings.compression == PNG and not png_available():
         ctx.problem(session, "subscribe", op.id, f"{PNG_NEEDS}; sending JSON", StatusLevel.WARNING)

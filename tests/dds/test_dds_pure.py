@@ -108,6 +108,26 @@ def test_reader_qos_adapts_to_the_writers_it_must_match():
     assert strongest([DEFAULT, QosProfile(depth=0)]).depth == 0
 
 
+def test_reader_qos_follows_what_subscribers_ask_for_else_adapts():
+    best_effort = QosProfile(reliable=False)
+    latched = QosProfile(transient_local=True, depth=1)
+    asked = reader_profile([DEFAULT], [{"reliability": "best_effort", "depth": 100}])
+    assert asked == QosProfile(False, False, 100)
+    assert reader_profile([best_effort], [{"reliability": "reliable"}]).reliable is True
+    assert (
+        reader_profile(
+            [DEFAULT], [{"reliability": "reliable"}, {"reliability": "best_effort"}]
+        ).reliable
+        is False
+    )
+    assert reader_profile([DEFAULT], [{"durability": "transient_local"}]).transient_local is True
+    assert reader_profile([latched], [{"durability": "volatile"}]).transient_local is False
+    adaptive = reader_profile([best_effort, latched], [{"reliability": "best_available"}])
+    assert adaptive == reader_profile([best_effort, latched])
+    with pytest.raises(QosError, match=r"qos\.reliability"):
+        reader_profile([], [{"reliability": "sometimes"}])
+
+
 def test_request_header_sits_between_encapsulation_and_fields(registry):
     body = to_cdr(registry, "std_srvs/srv/SetBool_Request", {"data": True})
     wrapped = request_header.wrap(body, RequestId(0x0102030405060708, 42))

@@ -15,10 +15,12 @@ import roslibpy
 
 from bridge.compose import run_bridge
 from bridge.config import BridgeConfig
+from bridge.dds.qos import QosProfile
 from clients import RosbridgeClient
 from clients.errors import ActionError
 from tests.compat import roslibpy_support as rp
 from tests.compat.node_runner import run_scenario
+from tests.compat.wire import wire_peer
 from tests.dds.conftest import take_domain
 from tests.dds.rclpy_env import DISTROS, rclpy_script
 
@@ -86,7 +88,20 @@ async def test_a_best_effort_publisher_is_read_with_default_options(ros2_node, r
         sensor = await client.subscribe("/sensor_be", "std_msgs/msg/String")
         first_msg = await first(sensor, lambda m: m["data"].startswith("sensor "))
         second = await first(sensor, lambda m: m["data"] != first_msg["data"])
+        async with wire_peer(bridge.url) as raw:
+            # the subscribe op's own `qos` (rosbridge's shape) sets the DDS reader's policies
+            await raw.send(
+                {
+                    "op": "subscribe",
+                    "topic": "/ros_chatter",
+                    "type": "std_msgs/msg/String",
+                    "qos": {"reliability": "best_effort", "depth": 100},
+                }
+            )
+            await raw.expect_op("publish", timeout_s=DISCOVERY_TIMEOUT_S, topic="/ros_chatter")
+            reader = bridge.plugins["dds"].topics.readers["/ros_chatter"]
     assert second["data"].startswith("sensor "), node.output()
+    assert reader.wanted.profile == QosProfile(reliable=False, transient_local=False, depth=100)
 
 
 async def wait_for_action(client, action: str, timeout_s: float = DISCOVERY_TIMEOUT_S) -> None:
