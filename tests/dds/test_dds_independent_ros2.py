@@ -1,0 +1,97 @@
+"""Actions, parameters and a best-effort topic of an independent participant (plain
+cyclonedds, tests/dds/ros2_action_peer.py: rcl_action's names, rosidl's types and
+rmw_cyclonedds's request header written by hand) reached through the bridge by roslibpy and
+rosapi. The Fast DDS side of the same is tests/dds/test_dds_rclpy.py."""
+
+from __future__ import annotations
+
+import asyncio
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+import roslibpy
+
+from bridge.compose import run_bridge
+from bridge.config import BridgeConfig
+from bridge.dds.cyclone_xml import CycloneSettings, cyclone_xml
+from clients import RosbridgeClient
+from tests.compat import roslibpy_support as rp
+from tests.dds.test_dds_rclpy import DISCOVERY_TIMEOUT_S, first, wait_for_action, wait_for_service
+
+pytestmark = pytest.mark.slow
+
+PEER = Path(__file__).resolve().parent / "ros2_action_peer.py"
+PEER_LIFETIME_S = 120.0
+
+
+def start_peer(domain: int) -> subprocess.Popen[str]:
+    env = {"CYCLONEDDS_URI": cyclone_xml(CycloneSettings(), tuned=False), "PATH": "/usr/bin"}
+    process = subprocess.Popen(
+        [sys.executable, str(PEER), str(domain), "peer_node", str(PEER_LIFETIME_S)],
+        env=env,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+    )
+    assert process.stdout is not None
+    line = process.stdout.readline()
+    assert line.startswith("READY"), line + process.stdout.read()
+    return process
+
+
+def roslibpy_goals(host: str, port: int) -> dict:
+    with rp.connected(host, port) as ros:
+        client = roslibpy.ActionClient(
+            ros, "/peer_fibonacci", "example_interfaces/action/Fibonacci"
+        )
+        feedback, results, errors = rp.Inbox(), rp.Inbox(), rp.Inbox()
+        client.send_goal(roslibpy.Goal({"order": 4}), results, feedback, errors)
+        [done] = results.expect(1, timeout_s=DISCOVERY_TIMEOUT_S)
+        canceled = rp.Inbox()
+        goal_id = client.send_goal(roslibpy.Goal({"order": 50}), canceled, rp.Inbox(), errors)
+        time.sleep(0.3)
+        client.cancel_goal(goal_id)
+        [stopped] = canceled.expect(1, timeout_s=DISCOVERY_TIMEOUT_S)
+    return {
+        "done": done,
+        "feedback": [list(f["sequence"]) for f in feedback.snapshot()],
+        "stopped": stopped,
+        "errors": errors.snapshot(),
+    }
+
+
+async def test_an_independent_participants_action_parameters_and_sensor(dds_domain, registry):
+    peer = await asyncio.to_thread(start_peer, dds_domain)
+    config = BridgeConfig(host="127.0.0.1", port=0, dds=True, dds_domain=dds_domain)
+    try:
+        async with (
+            run_bridge(config) as bridge,
+            RosbridgeClient(bridge.url, registry=registry) as client,
+        ):
+            sensor = await client.subscribe("/peer_sensor", "std_msgs/msg/String")
+            await first(sensor, lambda m: m["data"].startswith("peer sensor "))
+            await wait_for_action(client, "/peer_fibonacci")
+            outcome = await asyncio.to_thread(roslibpy_goals, "127.0.0.1", bridge.port)
+            await wait_for_service(client, "/peer_node/set_parameters")
+            gain = await client.call_service("/rosapi/get_param", {"name": "/peer_node:gain"})
+            changed = await client.call_service(
+                "/rosapi/set_param", {"name": "/peer_node:gain", "value": "2.5"}
+            )
+            refused = await client.call_service(
+                "/rosapi/set_param", {"name": "/peer_node:other", "value": "1"}
+            )
+            again = await client.call_service("/rosapi/get_param", {"name": "/peer_node:gain"})
+    finally:
+        peer.kill()
+        peer.communicate()
+    assert outcome["done"]["values"] == {"sequence": [0, 1, 1, 2, 3]}
+    assert outcome["feedback"] == [[0, 1, 1], [0, 1, 1, 2], [0, 1, 1, 2, 3]]
+    assert outcome["stopped"]["status"] == roslibpy.core.GoalStatus.CANCELED
+    assert outcome["errors"] == []
+    assert gain == {"value": "1.5", "successful": True, "reason": ""}
+    assert changed == {"successful": True, "reason": ""}
+    assert refused == {"successful": False, "reason": "only gain, a double"}
+    assert again["value"] == "2.5"
