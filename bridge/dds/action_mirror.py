@@ -12,21 +12,29 @@ advertises each remote action and turns the ops the core forwards to it into tho
 - samples of `…/_action/feedback` (subscribed while the action exists) -> `action_feedback`
   of the goal their UUID names;
 - `cancel_action_goal` -> `call_service …/_action/cancel_goal`; the result then says CANCELED.
+
+The other way, an action a websocket client advertises is offered on DDS by a
+`DdsActionServer` (`bridge.dds.action_server`); the same client sends its DDS goals to the
+provider as `send_action_goal` and hands back `action_feedback` and `action_result`.
 """
 
 from __future__ import annotations
 
 import logging
 import uuid
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
+from bridge.dds.action_server import ABORTED, DdsActionServer
 from bridge.dds.discovery import RemoteAction
 from bridge.dds.naming import action_part
+from bridge.dds.participant import DdsPlumbing
 from bridge.effects import Send
 from bridge.host import PluginHost
 from bridge.outgoing import ControlMessage, Delivery
-from schemas.values import JsonObject
+from schemas.errors import SchemaError
+from schemas.values import JsonObject, Message
 
 logger = logging.getLogger("bridge.dds")
 
@@ -73,8 +81,20 @@ def uuid_bytes(value: Any) -> bytes:
 class ActionMirror:
     """Keeps the bridge's stand-ins of the domain's action servers and runs their goals."""
 
-    def __init__(self, host: PluginHost, node: str, own_clients: set[int]) -> None:
+    def __init__(
+        self,
+        host: PluginHost,
+        node: str,
+        own_clients: set[int],
+        dds: DdsPlumbing,
+        to_loop: Callable[..., object],
+    ) -> None:
         self._host = host
+        self._dds, self._to_loop = dds, to_loop
+        self.served: dict[str, DdsActionServer] = {}
+        self._dds_goals: dict[str, tuple[DdsActionServer, bytes]] = {}  # op id -> goal
+        self._dds_goal_count = 0
+        self._refused: set[str] = set()
         self.node = f"{node}_actions"
         self.client = host.connect_internal(self.node, self._receives, peer="dds")
         own_clients.add(self.client)  # the mirror's own: never a websocket client's node
@@ -82,12 +102,14 @@ class ActionMirror:
         self._goals: dict[bytes, _Goal] = {}
         self._calls = _Calls()
 
-    def sync(self, remote: dict[str, RemoteAction], services: set[str]) -> None:
-        """Advertise each action whose three services the bridge can call; drop the rest."""
+    def sync(self, remote: dict[str, RemoteAction], services: set[str], local: set[str]) -> None:
+        """Advertise each remote action whose services the bridge can call, unless a
+        websocket client provides one of that name (never replaced); drop the rest."""
         wanted = {
             name: action
             for name, action in remote.items()
-            if all(action_part(name, p) in services for p in ("send_goal", "get_result"))
+            if name not in local
+            and all(action_part(name, p) in services for p in ("send_goal", "get_result"))
         }
         for name in [n for n, a in self.remote.items() if wanted.get(n) != a]:
             self._withdraw(name)
@@ -118,7 +140,77 @@ class ActionMirror:
             del self._goals[key]
 
     def close(self) -> None:
+        self.sync_local({})
         self._host.disconnect_internal(self.client)
+
+    # -- websocket clients' actions offered on DDS -------------------------------------------
+
+    def sync_local(self, local: dict[str, str]) -> bool:
+        """Offer each action websocket clients provide (name -> type) on DDS; True if the
+        DDS endpoints changed."""
+        changed = False
+        for name in [n for n, server in self.served.items() if local.get(n) != server.type_name]:
+            self.served.pop(name).close()
+            changed = True
+        for name, type_name in local.items():
+            if name in self.served or name in self._refused:
+                continue
+            try:
+                self.served[name] = DdsActionServer(
+                    self._dds, name, type_name, self, self._to_loop, self._host.now_ns
+                )
+            except (SchemaError, ValueError) as exc:
+                self._refused.add(name)
+                logger.warning("DDS: action %s (%s) is not offered: %s", name, type_name, exc)
+                continue
+            changed = True
+        return changed
+
+    def submit(self, server: DdsActionServer, goal_id: bytes, goal: Message) -> None:
+        """A DDS client's goal, sent to the websocket provider."""
+        self._dds_goal_count += 1
+        op_id = f"dds_goal:{self._dds_goal_count}"
+        self._dds_goals[op_id] = (server, goal_id)
+        self._send(
+            {
+                "op": "send_action_goal",
+                "action": server.name,
+                "action_type": server.type_name,
+                "args": goal,
+                "id": op_id,
+                "feedback": True,
+            }
+        )
+
+    def cancel(self, server: DdsActionServer, goal_id: bytes) -> None:
+        for op_id, (owner, goal) in self._dds_goals.items():
+            if owner is server and goal == goal_id:
+                self._send({"op": "cancel_action_goal", "id": op_id, "action": server.name})
+
+    def _provider_answered(self, payload: dict[str, Any]) -> bool:
+        """`action_feedback`/`action_result` for a DDS client's goal; False if not ours."""
+        op_id = str(payload.get("id"))
+        goal = self._dds_goals.get(op_id)
+        if goal is None:
+            return False
+        server, goal_id = goal
+        values = payload.get("values")
+        if payload.get("op") == "action_feedback":
+            server.feedback(goal_id, values if isinstance(values, dict) else {})
+            return True
+        del self._dds_goals[op_id]
+        if payload.get("result") is True and isinstance(values, dict):
+            status = payload.get("status")
+            server.finish(goal_id, status if isinstance(status, int) else ABORTED, values)
+        else:
+            logger.warning("DDS: goal of %s from DDS failed: %s", server.name, values)
+            server.finish(goal_id, ABORTED, None)
+        return True
+
+    def guids(self) -> tuple[list[bytes], list[bytes]]:
+        """(reader GUIDs, writer GUIDs) of every offered action's endpoints."""
+        pairs = [server.guids() for server in self.served.values()]
+        return [g for r, _ in pairs for g in r], [g for _, w in pairs for g in w]
 
     def _send(self, op: JsonObject) -> None:
         self._host.send_op(self.client, op)
@@ -131,6 +223,9 @@ class ActionMirror:
             self._feedback(item.message.msg)
             return
         payload = item.payload if isinstance(item, ControlMessage) else {}
+        if payload.get("op") in ("action_feedback", "action_result"):
+            self._provider_answered(payload)
+            return
         handler = {
             "send_action_goal": self._send_goal,
             "cancel_action_goal": self._cancel,

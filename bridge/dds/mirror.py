@@ -122,7 +122,7 @@ class DdsMirror:
         dds = DdsPlumbing(self.participant, self.pump, self.outbox, self.registry)
         self.topics = TopicMirror(dds, lambda arrivals: to_loop(self._inject, arrivals))
         self.services = ServiceMirror(self.host, dds, self.node, to_loop)
-        self.actions = ActionMirror(self.host, self.node, self.services.client_ids)
+        self.actions = ActionMirror(self.host, self.node, self.services.client_ids, dds, to_loop)
         self.announcer = Announcer(dds, self.node, lambda p, n: to_loop(self._nodes_seen, p, n))
         for condition in self.participant.discovery_conditions:
             self.pump.watch(condition, self._take_discovery)
@@ -229,10 +229,20 @@ class DdsMirror:
             if entry.provider in local and entry.type_name
         }
         self.services.sync(provided, self.view.services())
-        self.actions.sync(self.view.actions(), set(self.services.clients))
+        local_actions = {
+            name: entry.type_name
+            for name, entry in graph.actions.items()
+            if entry.provider in local and entry.type_name
+        }
+        self.actions.sync(self.view.actions(), set(self.services.clients), set(local_actions))
+        self.actions.sync_local(local_actions)
         topic_readers, topic_writers = self.topics.endpoint_guids()
         service_readers, service_writers = self.services.guids()
-        self.announcer.announce(topic_readers + service_readers, topic_writers + service_writers)
+        action_readers, action_writers = self.actions.guids()
+        self.announcer.announce(
+            topic_readers + service_readers + action_readers,
+            topic_writers + service_writers + action_writers,
+        )
 
     def _wanted_topics(
         self,

@@ -2,13 +2,18 @@
 conventions (rcl_action's names, rosidl's generated types, rmw_cyclonedds's request header),
 with no riverbridge code: an action server, parameter services and a best-effort publisher.
 
-usage: python3 ros2_action_peer.py DOMAIN NODE SECONDS
+usage: python3 ros2_action_peer.py DOMAIN serve NODE SECONDS
   - action `/peer_fibonacci` (example_interfaces/action/Fibonacci): `send_goal` accepts,
     one feedback per step every 0.1 s on `rt/peer_fibonacci/_action/feedback`, `get_result`
     answers when the goal ends, `cancel_goal` cancels (status CANCELED, 5);
   - `/NODE/get_parameters` and `/NODE/set_parameters` over one double parameter `gain` (1.5);
   - `rt/peer_sensor` (std_msgs/msg/String, best effort) at 10 Hz.
 Prints "READY", then one JSON line with what it was asked when SECONDS have passed.
+
+usage: python3 ros2_action_peer.py DOMAIN client ACTION ORDER TIMEOUT_S
+  an rcl_action client of ACTION (example_interfaces/action/Fibonacci): waits for the server,
+  sends one goal (a UUID of its own), collects its feedback, asks `get_result`, reads the
+  status topic; prints them as one JSON line.
 """
 
 # No `from __future__ import annotations`: cyclonedds reads the field annotations as objects.
@@ -184,6 +189,17 @@ class SetParametersResponse(
 
 
 @dataclass
+class GoalStatus(IdlStruct, typename="action_msgs::msg::dds_::GoalStatus_"):
+    goal_info: GoalInfo
+    status: t.int8
+
+
+@dataclass
+class GoalStatusArray(IdlStruct, typename="action_msgs::msg::dds_::GoalStatusArray_"):
+    status_list: t.sequence[GoalStatus]
+
+
+@dataclass
 class String(IdlStruct, typename="std_msgs::msg::dds_::String_"):
     data: str
 
@@ -315,9 +331,99 @@ class Peer:
         return SetParametersResponse(request.guid, request.seq, results)
 
 
+class Client:
+    """rcl_action's client side: a request writer and reply reader per service."""
+
+    def __init__(self, participant: DomainParticipant, action: str) -> None:
+        user_data = Policy.Userdata(data=b"clientid=peer.client;")
+        self.pairs = {}
+        for part, request, response in (
+            ("send_goal", SendGoalRequest, SendGoalResponse),
+            ("get_result", GetResultRequest, GetResultResponse),
+        ):
+            name = f"{action}/_action/{part}"
+            writer = DataWriter(
+                participant,
+                Topic(participant, f"rq{name}Request", request),
+                Qos(*RELIABLE, user_data),
+            )
+            reader = DataReader(
+                participant,
+                Topic(participant, f"rr{name}Reply", response),
+                Qos(*RELIABLE, user_data),
+            )
+            self.pairs[part] = (writer, reader)
+        self.feedback = DataReader(
+            participant,
+            Topic(participant, f"rt{action}/_action/feedback", FeedbackMessage),
+            RELIABLE,
+        )
+        status_qos = Qos(
+            Policy.Reliability.Reliable(1_000_000_000),
+            Policy.Durability.TransientLocal,
+            Policy.History.KeepLast(1),
+        )
+        self.status = DataReader(
+            participant,
+            Topic(participant, f"rt{action}/_action/status", GoalStatusArray),
+            status_qos,
+        )
+        self.guid = self.pairs["send_goal"][0].get_instance_handle() & (2**64 - 1)
+
+    def matched(self) -> bool:
+        return all(
+            writer.get_publication_matched_status().current_count
+            and reader.get_subscription_matched_status().current_count
+            for writer, reader in self.pairs.values()
+        )
+
+    def call(self, part: str, request, deadline_s: float):
+        writer, reader = self.pairs[part]
+        writer.write(request)
+        while time.monotonic() < deadline_s:
+            for reply in reader.take(N=10):
+                if reply.guid == request.guid and reply.seq == request.seq:
+                    return reply
+            time.sleep(0.02)
+        raise TimeoutError(f"no {part} reply")
+
+
+def run_client(participant: DomainParticipant, action: str, order: int, timeout_s: float) -> dict:
+    client = Client(participant, action)
+    deadline_s = time.monotonic() + timeout_s
+    while not client.matched():
+        if time.monotonic() > deadline_s:
+            return {"ok": False, "reason": "the action server was never matched"}
+        time.sleep(0.05)
+    goal_id = UUID(list(range(1, 17)))
+    accepted = client.call(
+        "send_goal", SendGoalRequest(client.guid, 1, goal_id, Goal(order)), deadline_s
+    )
+    result = client.call("get_result", GetResultRequest(client.guid, 2, goal_id), deadline_s)
+    feedback = [list(m.feedback.sequence) for m in client.feedback.take(N=100)]
+    statuses = [
+        [(list(s.goal_info.goal_id.uuid), s.status) for s in array.status_list]
+        for array in client.status.read(N=10)
+    ]
+    return {
+        "ok": True,
+        "accepted": accepted.accepted,
+        "status": result.status,
+        "sequence": list(result.result.sequence),
+        "feedback": feedback,
+        "statuses": statuses,
+    }
+
+
 def main(argv: list[str]) -> int:
-    domain, node, seconds = argv
-    peer = Peer(DomainParticipant(int(domain)), node)
+    domain, mode, *args = argv
+    participant = DomainParticipant(int(domain))
+    if mode == "client":
+        result = run_client(participant, args[0], int(args[1]), float(args[2]))
+        print(json.dumps(result), flush=True)
+        return 0 if result["ok"] else 1
+    node, seconds = args
+    peer = Peer(participant, node)
     print("READY", flush=True)
     end_s = time.monotonic() + float(seconds)
     next_sensor_s, count = 0.0, 0

@@ -6,6 +6,7 @@ rosapi. The Fast DDS side of the same is tests/dds/test_dds_rclpy.py."""
 from __future__ import annotations
 
 import asyncio
+import json
 import subprocess
 import sys
 import time
@@ -25,12 +26,13 @@ pytestmark = pytest.mark.slow
 
 PEER = Path(__file__).resolve().parent / "ros2_action_peer.py"
 PEER_LIFETIME_S = 120.0
+SUCCEEDED = 4  # action_msgs/msg/GoalStatus
 
 
 def start_peer(domain: int) -> subprocess.Popen[str]:
     env = {"CYCLONEDDS_URI": cyclone_xml(CycloneSettings(), tuned=False), "PATH": "/usr/bin"}
     process = subprocess.Popen(
-        [sys.executable, str(PEER), str(domain), "peer_node", str(PEER_LIFETIME_S)],
+        [sys.executable, str(PEER), str(domain), "serve", "peer_node", str(PEER_LIFETIME_S)],
         env=env,
         stdout=subprocess.PIPE,
         stderr=subprocess.STDOUT,
@@ -40,6 +42,30 @@ def start_peer(domain: int) -> subprocess.Popen[str]:
     line = process.stdout.readline()
     assert line.startswith("READY"), line + process.stdout.read()
     return process
+
+
+async def run_peer(domain: int, *args: str, timeout_s: float = 90.0) -> dict:
+    """Run the peer in `client` mode to its end; its JSON line."""
+    env = {"CYCLONEDDS_URI": cyclone_xml(CycloneSettings(), tuned=False), "PATH": "/usr/bin"}
+    process = await asyncio.create_subprocess_exec(
+        sys.executable,
+        str(PEER),
+        str(domain),
+        *args,
+        env=env,
+        stdout=asyncio.subprocess.PIPE,
+        stderr=asyncio.subprocess.PIPE,
+    )
+    try:
+        async with asyncio.timeout(timeout_s):
+            out, err = await process.communicate()
+    finally:
+        if process.returncode is None:
+            process.kill()
+            await process.wait()
+    lines = [line for line in out.decode().splitlines() if line.startswith("{")]
+    assert process.returncode == 0 and lines, (out.decode(), err.decode()[-3000:])
+    return json.loads(lines[-1])
 
 
 def roslibpy_goals(host: str, port: int) -> dict:
@@ -95,3 +121,31 @@ async def test_an_independent_participants_action_parameters_and_sensor(dds_doma
     assert changed == {"successful": True, "reason": ""}
     assert refused == {"successful": False, "reason": "only gain, a double"}
     assert again["value"] == "2.5"
+
+
+async def test_an_independent_action_client_drives_a_websocket_clients_action(dds_domain, registry):
+    """The other way: a websocket client's advertise_action is an action server on DDS."""
+    config = BridgeConfig(host="127.0.0.1", port=0, dds=True, dds_domain=dds_domain)
+    goals = []
+
+    async def fibonacci(args, feedback):
+        goals.append(args)
+        sequence = [0, 1]
+        for _ in range(1, args["order"]):
+            sequence.append(sequence[-1] + sequence[-2])
+            await feedback({"sequence": sequence})
+        return {"sequence": sequence}
+
+    async with (
+        run_bridge(config) as bridge,
+        RosbridgeClient(bridge.url, registry=registry) as provider,
+    ):
+        await provider.advertise_action(
+            "/ws_fibonacci", "example_interfaces/action/Fibonacci", fibonacci
+        )
+        answer = await run_peer(dds_domain, "client", "/ws_fibonacci", "5", "60")
+    assert [dict(g) for g in goals] == [{"order": 5}]
+    assert answer["accepted"] is True and answer["status"] == SUCCEEDED
+    assert answer["sequence"] == [0, 1, 1, 2, 3, 5]
+    assert answer["feedback"][-1] == [0, 1, 1, 2, 3, 5]
+    assert answer["statuses"][-1] == [[list(range(1, 17)), SUCCEEDED]]
