@@ -22,7 +22,6 @@ from bridge.dds.participant import DdsPlumbing, RawWriter
 from bridge.dds.qos import DEFAULT, QosProfile
 from bridge.dds.request_header import RequestId
 from bridge.dds.service_endpoints import ServiceServer
-from bridge.dds.topic_mirror import type_hash_user_data
 from schemas.codec_cdr import to_cdr
 from schemas.values import Message
 
@@ -104,7 +103,7 @@ class DdsActionServer:
             topic_to_dds(action_part(self.name, part)),
             participant.types.message(registry.message(type_name)),
             profile,
-            type_hash_user_data(registry, type_name),
+            self._dds.type_hash(type_name),
         )
 
     # -- DDS clients' requests (on the loop) -------------------------------------------------

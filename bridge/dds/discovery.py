@@ -10,18 +10,15 @@ name made from the participant: `/dds_participant_<8 hex digits>`. Pure: no Cycl
 from __future__ import annotations
 
 import zlib
-from collections.abc import Iterable
 from dataclasses import dataclass, field
 
 from bridge.dds.naming import (
     action_of_send_goal,
-    node_name,
     parse_dds_topic,
     service_type_of_part,
     type_from_dds,
 )
 from bridge.dds.qos import DEFAULT, QosProfile
-from schemas.values import Message
 
 
 @dataclass(frozen=True)
@@ -101,23 +98,6 @@ def is_fast_dds(participant: bytes) -> bool:
 def participant_node(participant: bytes) -> str:
     """The node name given to endpoints of a participant that announces no nodes."""
     return f"/dds_participant_{zlib.crc32(participant[:12]):08x}"
-
-
-def nodes_from_discovery_info(msg: Message) -> tuple[bytes, tuple[NodeEntities, ...]]:
-    """(participant gid, its nodes) from a canonical `ParticipantEntitiesInfo` message."""
-
-    def gids(items: Iterable[Message]) -> frozenset[bytes]:
-        return frozenset(bytes(item["data"]) for item in items)
-
-    nodes = tuple(
-        NodeEntities(
-            node_name(n["node_namespace"], n["node_name"]),
-            gids(n["reader_gid_seq"]),
-            gids(n["writer_gid_seq"]),
-        )
-        for n in msg["node_entities_info_seq"]
-    )
-    return bytes(msg["gid"]["data"]), nodes
 
 
 class DomainView:

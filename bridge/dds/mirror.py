@@ -119,7 +119,9 @@ class DdsMirror:
         self.writer = WriterThread(self.outbox)
         self.pump = Pump(self.participant)
         to_loop = loop.call_soon_threadsafe
-        dds = DdsPlumbing(self.participant, self.pump, self.outbox, self.registry)
+        dds = DdsPlumbing(
+            self.participant, self.pump, self.outbox, self.registry, self.config.distro
+        )
         self.topics = TopicMirror(dds, lambda arrivals: to_loop(self._inject, arrivals))
         self.services = ServiceMirror(self.host, dds, self.node, to_loop)
         self.actions = ActionMirror(self.host, self.node, self.services.client_ids, dds, to_loop)

@@ -20,7 +20,6 @@ from bridge.dds.naming import reply_topic, request_topic
 from bridge.dds.participant import DdsPlumbing, RawReader, RawWriter
 from bridge.dds.qos import SERVICES
 from bridge.dds.request_header import RequestId
-from bridge.dds.topic_mirror import type_hash_user_data
 from schemas.codec_cdr import from_cdr, to_cdr
 from schemas.errors import SchemaError
 from schemas.values import Message
@@ -75,13 +74,13 @@ class _ServiceEndpoints:
             write_topic,
             part_type(outgoing),
             SERVICES,
-            key + type_hash_user_data(registry, outgoing.name),
+            key + dds.type_hash(outgoing.name),
         )
         self.reader: RawReader = participant.reader(
             read_topic,
             part_type(incoming),
             SERVICES,
-            key + type_hash_user_data(registry, incoming.name),
+            key + dds.type_hash(incoming.name),
         )
         dds.pump.watch(self.reader.condition, self._take)
 

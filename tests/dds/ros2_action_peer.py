@@ -10,6 +10,10 @@ usage: python3 ros2_action_peer.py DOMAIN serve NODE SECONDS
   - `rt/peer_sensor` (std_msgs/msg/String, best effort) at 10 Hz.
 Prints "READY", then one JSON line with what it was asked when SECONDS have passed.
 
+usage: python3 ros2_action_peer.py DOMAIN humble_node SECONDS
+  a Humble node `/humble_talker`: its `ros_discovery_info` with Humble's 24-byte GIDs
+  (rmw_dds_common/msg/Gid `char[24]`), owning a writer of `rt/humble_chatter` (String, 10 Hz).
+
 usage: python3 ros2_action_peer.py DOMAIN client ACTION ORDER TIMEOUT_S
   an rcl_action client of ACTION (example_interfaces/action/Fibonacci): waits for the server,
   sends one goal (a UUID of its own), collects its feedback, asks `get_result`, reads the
@@ -197,6 +201,27 @@ class GoalStatus(IdlStruct, typename="action_msgs::msg::dds_::GoalStatus_"):
 @dataclass
 class GoalStatusArray(IdlStruct, typename="action_msgs::msg::dds_::GoalStatusArray_"):
     status_list: t.sequence[GoalStatus]
+
+
+@dataclass
+class HumbleGid(IdlStruct, typename="rmw_dds_common::msg::dds_::Gid_"):
+    data: t.array[t.uint8, 24]
+
+
+@dataclass
+class HumbleNodeEntitiesInfo(IdlStruct, typename="rmw_dds_common::msg::dds_::NodeEntitiesInfo_"):
+    node_namespace: t.bounded_str[256]
+    node_name: t.bounded_str[256]
+    reader_gid_seq: t.sequence[HumbleGid]
+    writer_gid_seq: t.sequence[HumbleGid]
+
+
+@dataclass
+class HumbleParticipantEntitiesInfo(
+    IdlStruct, typename="rmw_dds_common::msg::dds_::ParticipantEntitiesInfo_"
+):
+    gid: HumbleGid
+    node_entities_info_seq: t.sequence[HumbleNodeEntitiesInfo]
 
 
 @dataclass
@@ -415,9 +440,39 @@ def run_client(participant: DomainParticipant, action: str, order: int, timeout_
     }
 
 
+def humble_gid(guid: bytes) -> HumbleGid:
+    return HumbleGid(list(guid) + [0] * 8)
+
+
+def run_humble_node(participant: DomainParticipant, seconds: float) -> dict:
+    chatter = DataWriter(participant, Topic(participant, "rt/humble_chatter", String), RELIABLE)
+    discovery_qos = Qos(
+        Policy.Reliability.Reliable(1_000_000_000),
+        Policy.Durability.TransientLocal,
+        Policy.History.KeepLast(1),
+    )
+    info = DataWriter(
+        participant,
+        Topic(participant, "ros_discovery_info", HumbleParticipantEntitiesInfo),
+        discovery_qos,
+    )
+    node = HumbleNodeEntitiesInfo("/", "humble_talker", [], [humble_gid(chatter.guid.bytes)])
+    info.write(HumbleParticipantEntitiesInfo(humble_gid(participant.guid.bytes), [node]))
+    print("READY", flush=True)
+    end_s, count = time.monotonic() + seconds, 0
+    while time.monotonic() < end_s:
+        count += 1
+        chatter.write(String(f"humble {count}"))
+        time.sleep(0.1)
+    return {"ok": True, "sent": count}
+
+
 def main(argv: list[str]) -> int:
     domain, mode, *args = argv
     participant = DomainParticipant(int(domain))
+    if mode == "humble_node":
+        print(json.dumps(run_humble_node(participant, float(args[0]))), flush=True)
+        return 0
     if mode == "client":
         result = run_client(participant, args[0], int(args[1]), float(args[2]))
         print(json.dumps(result), flush=True)

@@ -29,10 +29,11 @@ PEER_LIFETIME_S = 120.0
 SUCCEEDED = 4  # action_msgs/msg/GoalStatus
 
 
-def start_peer(domain: int) -> subprocess.Popen[str]:
+def start_peer(domain: int, *args: str) -> subprocess.Popen[str]:
     env = {"CYCLONEDDS_URI": cyclone_xml(CycloneSettings(), tuned=False), "PATH": "/usr/bin"}
+    args = args or ("serve", "peer_node", str(PEER_LIFETIME_S))
     process = subprocess.Popen(
-        [sys.executable, str(PEER), str(domain), "serve", "peer_node", str(PEER_LIFETIME_S)],
+        [sys.executable, str(PEER), str(domain), *args],
         env=env,
         stdout=subprocess.PIPE,
         stderr=subprocess.STDOUT,
@@ -149,3 +150,47 @@ async def test_an_independent_action_client_drives_a_websocket_clients_action(dd
     assert answer["sequence"] == [0, 1, 1, 2, 3, 5]
     assert answer["feedback"][-1] == [0, 1, 1, 2, 3, 5]
     assert answer["statuses"][-1] == [[list(range(1, 17)), SUCCEEDED]]
+
+
+async def publishers_of(client, topic: str, timeout_s: float = DISCOVERY_TIMEOUT_S) -> list:
+    """rosapi's publishers of `topic` once it has any."""
+    async with asyncio.timeout(timeout_s):
+        while True:
+            found = await client.call_service("/rosapi/publishers", {"topic": topic})
+            if found["publishers"]:
+                return found["publishers"]
+            await asyncio.sleep(0.2)
+
+
+@pytest.mark.parametrize(
+    ("distro", "named"), [("humble", True), ("jazzy", False)], ids=["humble", "jazzy"]
+)
+async def test_ros_distro_selects_the_discovery_info_layout(
+    dds_domain, registry, distro, named, caplog
+):
+    """A Humble node's ros_discovery_info (24-byte GIDs) names its node for a bridge started
+    with --ros-distro humble; a Jazzy bridge cannot read it (this peer sends XTypes type
+    information, so its 24-byte layout does not even match a Jazzy reader; a real Humble node
+    sends none and the bridge warns once) and names the endpoint after its participant.
+    Topics cross either way."""
+    peer = await asyncio.to_thread(start_peer, dds_domain, "humble_node", str(PEER_LIFETIME_S))
+    config = BridgeConfig(host="127.0.0.1", port=0, dds=True, dds_domain=dds_domain, distro=distro)
+    try:
+        async with (
+            run_bridge(config) as bridge,
+            RosbridgeClient(bridge.url, registry=registry) as client,
+        ):
+            chatter = await client.subscribe("/humble_chatter", "std_msgs/msg/String")
+            await first(chatter, lambda m: m["data"].startswith("humble "))
+            publishers = await publishers_of(client, "/humble_chatter")
+            version = await client.call_service("/rosapi/get_ros_version", {})
+    finally:
+        peer.kill()
+        peer.communicate()
+    assert version == {"version": 2, "distro": distro}
+    layout_notes = [r for r in caplog.records if "ros_discovery_info sample" in r.getMessage()]
+    if named:
+        assert publishers == ["/humble_talker"] and layout_notes == []
+    else:
+        assert len(publishers) == 1 and publishers[0].startswith("/dds_participant_")
+        assert len(layout_notes) <= 1

@@ -9,9 +9,10 @@ import pytest
 
 from bridge.config import BridgeConfig
 from bridge.core import BridgeCore
-from bridge.dds import naming, request_header
+from bridge.dds import discovery_info, naming, request_header
 from bridge.dds.cyclone_xml import CycloneSettings, cyclone_xml
 from bridge.dds.discovery import DomainView, Endpoint, NodeEntities, Snapshot, participant_node
+from bridge.dds.discovery_info import ParticipantInfo
 from bridge.dds.graph_sync import GraphSync
 from bridge.dds.outbox import Outbox
 from bridge.dds.qos import (
@@ -234,3 +235,28 @@ def test_outbox_keeps_order_and_drops_the_oldest_of_a_full_stream():
     assert outbox.dropped == {"imu": 2, "scan": 2}
     outbox.close()
     assert outbox.get(timeout_s=0) is None
+
+
+def test_discovery_info_layouts_per_distribution(registry):
+    """Jazzy's bytes are rosbags' own CDR of the message; Humble's GIDs take 24 bytes."""
+    node = NodeEntities("/ns/talker", frozenset({bytes(range(16))}), frozenset())
+    info = ParticipantInfo(bytes(range(100, 116)), (node,))
+    jazzy = discovery_info.encode(info, "jazzy")
+    canonical = {
+        "gid": {"data": info.participant},
+        "node_entities_info_seq": [
+            {
+                "node_namespace": "/ns",
+                "node_name": "talker",
+                "reader_gid_seq": [{"data": bytes(range(16))}],
+                "writer_gid_seq": [],
+            }
+        ],
+    }
+    assert jazzy == to_cdr(registry, "rmw_dds_common/msg/ParticipantEntitiesInfo", canonical)
+    humble = discovery_info.encode(info, "humble")
+    assert len(humble) == len(jazzy) + 8 + 8  # the participant's and the reader's GID
+    assert discovery_info.decode(humble, "humble") == info
+    assert discovery_info.decode(jazzy, "kilted") == info
+    with pytest.raises(ValueError):
+        discovery_info.decode(jazzy, "humble")
