@@ -1,8 +1,8 @@
 """The bridge in a graph of real ROS 2 nodes: rclpy from PyPI (Jazzy and Kilted wheels, on
 rmw_fastrtps_cpp, Fast DDS) on one loopback domain with `riverbridge bridge --dds` (Cyclone).
 
-One rclpy process per distribution serves the whole module (tests/dds/ros2_nodes/rclpy_node.py);
-each test starts its own bridge on that domain.
+One rclpy process per distribution (tests/dds/ros2_nodes/rclpy_node.py) and one bridge on its
+domain serve the whole module; each test connects clients of its own.
 """
 
 from __future__ import annotations
@@ -11,6 +11,7 @@ import asyncio
 import time
 
 import pytest
+import pytest_asyncio
 import roslibpy
 
 from bridge.compose import run_bridge
@@ -24,7 +25,8 @@ from tests.compat.wire import wire_peer
 from tests.dds.conftest import take_domain
 from tests.dds.rclpy_env import DISTROS, rclpy_script
 
-pytestmark = pytest.mark.slow
+# One rclpy node and one bridge per distribution serve the whole module (discovery once).
+pytestmark = [pytest.mark.slow, pytest.mark.asyncio(loop_scope="module")]
 
 DISCOVERY_TIMEOUT_S = 30.0
 GOAL_CANCELED = 5  # action_msgs/msg/GoalStatus
@@ -36,6 +38,14 @@ def ros2_node(request):
     domain = take_domain()
     with rclpy_script(request.param, domain, "rclpy_node.py", "rb_test_node") as node:
         yield request.param, domain, node
+
+
+@pytest_asyncio.fixture(scope="module", loop_scope="module")
+async def bridge(ros2_node):
+    """`riverbridge bridge --dds` on the node's domain, shared by the module's tests."""
+    _, domain, _ = ros2_node
+    async with run_bridge(bridge_config(domain)) as running:
+        yield running
 
 
 async def first(subscription, predicate, timeout_s: float = DISCOVERY_TIMEOUT_S):
@@ -51,12 +61,9 @@ def bridge_config(domain: int) -> BridgeConfig:
     return BridgeConfig(host="127.0.0.1", port=0, dds=True, dds_domain=domain)
 
 
-async def test_strings_cross_both_ways(ros2_node, registry):
-    distro, domain, node = ros2_node
-    async with (
-        run_bridge(bridge_config(domain)) as bridge,
-        RosbridgeClient(bridge.url, registry=registry) as client,
-    ):
+async def test_strings_cross_both_ways(ros2_node, bridge, registry):
+    distro, _, node = ros2_node
+    async with RosbridgeClient(bridge.url, registry=registry) as client:
         chatter = await client.subscribe("/ros_chatter", "std_msgs/msg/String")
         heard = await first(chatter, lambda m: m["data"].startswith("hello "))
         echoes = await client.subscribe("/from_ros", "std_msgs/msg/String")
@@ -78,13 +85,10 @@ async def test_strings_cross_both_ways(ros2_node, registry):
     assert echo["data"].startswith(f"echo: from {distro} "), node.output()
 
 
-async def test_a_best_effort_publisher_is_read_with_default_options(ros2_node, registry):
+async def test_a_best_effort_publisher_is_read_with_default_options(ros2_node, bridge, registry):
     """rclpy's sensor-data QoS (best effort): a subscribe without any QoS still gets it."""
-    _, domain, node = ros2_node
-    async with (
-        run_bridge(bridge_config(domain)) as bridge,
-        RosbridgeClient(bridge.url, registry=registry) as client,
-    ):
+    node = ros2_node[2]
+    async with RosbridgeClient(bridge.url, registry=registry) as client:
         sensor = await client.subscribe("/sensor_be", "std_msgs/msg/String")
         first_msg = await first(sensor, lambda m: m["data"].startswith("sensor "))
         second = await first(sensor, lambda m: m["data"] != first_msg["data"])
@@ -114,13 +118,10 @@ async def wait_for_action(client, action: str, timeout_s: float = DISCOVERY_TIME
             await asyncio.sleep(0.2)
 
 
-async def test_an_rclpy_action_server_serves_goals_feedback_and_cancel(ros2_node, registry):
+async def test_an_rclpy_action_server_serves_goals_feedback_and_cancel(ros2_node, bridge, registry):
     """riverbridge's own client drives rclpy's ActionServer (test_msgs/action/Fibonacci)."""
-    _, domain, node = ros2_node
-    async with (
-        run_bridge(bridge_config(domain)) as bridge,
-        RosbridgeClient(bridge.url, registry=registry) as client,
-    ):
+    node = ros2_node[2]
+    async with RosbridgeClient(bridge.url, registry=registry) as client:
         await wait_for_action(client, "/fibonacci")
         goal = await client.send_action_goal(
             "/fibonacci", "test_msgs/action/Fibonacci", {"order": 5}
@@ -146,14 +147,11 @@ async def wait_for_service(client, service: str, timeout_s: float = DISCOVERY_TI
             await asyncio.sleep(0.2)
 
 
-async def test_rclpy_node_parameters_are_read_and_set_through_rosapi(ros2_node, registry):
+async def test_rclpy_node_parameters_are_read_and_set_through_rosapi(ros2_node, bridge, registry):
     """rosapi's `node_name:param_name` against the node's rcl_interfaces services; the node
     itself then reads the new value (it publishes what `get_parameter` returns)."""
-    _, domain, node = ros2_node
-    async with (
-        run_bridge(bridge_config(domain)) as bridge,
-        RosbridgeClient(bridge.url, registry=registry) as client,
-    ):
+    node = ros2_node[2]
+    async with RosbridgeClient(bridge.url, registry=registry) as client:
         await wait_for_service(client, "/rb_test_node/set_parameters")
         seen = await client.subscribe("/param_seen", "std_msgs/msg/String")
         gain = await client.call_service("/rosapi/get_param", {"name": "/rb_test_node:gain"})
@@ -195,12 +193,9 @@ def roslibpy_fibonacci(host: str, port: int) -> dict:
     }
 
 
-async def test_roslibpy_drives_the_rclpy_action_server(ros2_node, registry):
-    _, domain, node = ros2_node
-    async with (
-        run_bridge(bridge_config(domain)) as bridge,
-        RosbridgeClient(bridge.url, registry=registry) as client,
-    ):
+async def test_roslibpy_drives_the_rclpy_action_server(ros2_node, bridge, registry):
+    node = ros2_node[2]
+    async with RosbridgeClient(bridge.url, registry=registry) as client:
         await wait_for_action(client, "/fibonacci")
         outcome = await asyncio.to_thread(roslibpy_fibonacci, "127.0.0.1", bridge.port)
     assert outcome["done"]["values"] == {"sequence": [0, 1, 1, 2, 3]}, node.output()
@@ -213,12 +208,9 @@ async def test_roslibpy_drives_the_rclpy_action_server(ros2_node, registry):
     ]
 
 
-async def test_roslibjs_drives_the_rclpy_action_server(ros2_node, registry):
-    _, domain, node = ros2_node
-    async with (
-        run_bridge(bridge_config(domain)) as bridge,
-        RosbridgeClient(bridge.url, registry=registry) as client,
-    ):
+async def test_roslibjs_drives_the_rclpy_action_server(ros2_node, bridge, registry):
+    node = ros2_node[2]
+    async with RosbridgeClient(bridge.url, registry=registry) as client:
         await wait_for_action(client, "/fibonacci")
         outcome = await asyncio.to_thread(
             run_scenario,
