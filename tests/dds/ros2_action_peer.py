@@ -14,6 +14,10 @@ usage: python3 ros2_action_peer.py DOMAIN humble_node SECONDS
   a Humble node `/humble_talker`: its `ros_discovery_info` with Humble's 24-byte GIDs
   (rmw_dds_common/msg/Gid `char[24]`), owning a writer of `rt/humble_chatter` (String, 10 Hz).
 
+usage: python3 ros2_action_peer.py DOMAIN params NODE TIMEOUT_S
+  a parameter client of NODE (as `ros2 param` is): sets `gain` to 2.5, then lists NODE's
+  parameters and gets `gain`, `preset` and `missing`; prints them as one JSON line.
+
 usage: python3 ros2_action_peer.py DOMAIN client ACTION ORDER TIMEOUT_S
   an rcl_action client of ACTION (example_interfaces/action/Fibonacci): waits for the server,
   sends one goal (a UUID of its own), collects its feedback, asks `get_result`, reads the
@@ -204,6 +208,31 @@ class GoalStatusArray(IdlStruct, typename="action_msgs::msg::dds_::GoalStatusArr
 
 
 @dataclass
+class ListParametersResult(IdlStruct, typename="rcl_interfaces::msg::dds_::ListParametersResult_"):
+    names: t.sequence[str]
+    prefixes: t.sequence[str]
+
+
+@dataclass
+class ListParametersRequest(
+    IdlStruct, typename="rcl_interfaces::srv::dds_::ListParameters_Request_"
+):
+    guid: t.uint64
+    seq: t.int64
+    prefixes: t.sequence[str]
+    depth: t.uint64
+
+
+@dataclass
+class ListParametersResponse(
+    IdlStruct, typename="rcl_interfaces::srv::dds_::ListParameters_Response_"
+):
+    guid: t.uint64
+    seq: t.int64
+    result: ListParametersResult
+
+
+@dataclass
 class HumbleGid(IdlStruct, typename="rmw_dds_common::msg::dds_::Gid_"):
     data: t.array[t.uint8, 24]
 
@@ -357,16 +386,17 @@ class Peer:
 
 
 class Client:
-    """rcl_action's client side: a request writer and reply reader per service."""
+    """Service clients, each a request writer and a reply reader: rcl_action's (with the
+    feedback and status readers) or a node's parameter services."""
 
-    def __init__(self, participant: DomainParticipant, action: str) -> None:
+    def __init__(self, participant: DomainParticipant, action: str, services=()) -> None:
         user_data = Policy.Userdata(data=b"clientid=peer.client;")
+        services = services or (
+            (f"{action}/_action/send_goal", SendGoalRequest, SendGoalResponse),
+            (f"{action}/_action/get_result", GetResultRequest, GetResultResponse),
+        )
         self.pairs = {}
-        for part, request, response in (
-            ("send_goal", SendGoalRequest, SendGoalResponse),
-            ("get_result", GetResultRequest, GetResultResponse),
-        ):
-            name = f"{action}/_action/{part}"
+        for name, request, response in services:
             writer = DataWriter(
                 participant,
                 Topic(participant, f"rq{name}Request", request),
@@ -377,23 +407,25 @@ class Client:
                 Topic(participant, f"rr{name}Reply", response),
                 Qos(*RELIABLE, user_data),
             )
-            self.pairs[part] = (writer, reader)
-        self.feedback = DataReader(
-            participant,
-            Topic(participant, f"rt{action}/_action/feedback", FeedbackMessage),
-            RELIABLE,
-        )
-        status_qos = Qos(
-            Policy.Reliability.Reliable(1_000_000_000),
-            Policy.Durability.TransientLocal,
-            Policy.History.KeepLast(1),
-        )
-        self.status = DataReader(
-            participant,
-            Topic(participant, f"rt{action}/_action/status", GoalStatusArray),
-            status_qos,
-        )
-        self.guid = self.pairs["send_goal"][0].get_instance_handle() & (2**64 - 1)
+            self.pairs[name.rsplit("/", 1)[1]] = (writer, reader)
+        if action:
+            self.feedback = DataReader(
+                participant,
+                Topic(participant, f"rt{action}/_action/feedback", FeedbackMessage),
+                RELIABLE,
+            )
+            status_qos = Qos(
+                Policy.Reliability.Reliable(1_000_000_000),
+                Policy.Durability.TransientLocal,
+                Policy.History.KeepLast(1),
+            )
+            self.status = DataReader(
+                participant,
+                Topic(participant, f"rt{action}/_action/status", GoalStatusArray),
+                status_qos,
+            )
+        first_writer = next(iter(self.pairs.values()))[0]
+        self.guid = first_writer.get_instance_handle() & (2**64 - 1)
 
     def matched(self) -> bool:
         return all(
@@ -411,6 +443,38 @@ class Client:
                     return reply
             time.sleep(0.02)
         raise TimeoutError(f"no {part} reply")
+
+
+def run_params(participant: DomainParticipant, node: str, timeout_s: float) -> dict:
+    client = Client(
+        participant,
+        "",
+        (
+            (f"/{node}/set_parameters", SetParametersRequest, SetParametersResponse),
+            (f"/{node}/list_parameters", ListParametersRequest, ListParametersResponse),
+            (f"/{node}/get_parameters", GetParametersRequest, GetParametersResponse),
+        ),
+    )
+    deadline_s = time.monotonic() + timeout_s
+    while not client.matched():
+        if time.monotonic() > deadline_s:
+            return {"ok": False, "reason": f"/{node}'s parameter services were never matched"}
+        time.sleep(0.05)
+    gain = Parameter("gain", double(2.5))
+    set_reply = client.call(
+        "set_parameters", SetParametersRequest(client.guid, 1, [gain]), deadline_s
+    )
+    listed = client.call(
+        "list_parameters", ListParametersRequest(client.guid, 2, [], 0), deadline_s
+    )
+    names = ["gain", "preset", "missing"]
+    got = client.call("get_parameters", GetParametersRequest(client.guid, 3, names), deadline_s)
+    return {
+        "ok": True,
+        "set": [[r.successful, r.reason] for r in set_reply.results],
+        "names": sorted(listed.result.names),
+        "values": [[v.type, v.double_value, v.integer_value] for v in got.values],
+    }
 
 
 def run_client(participant: DomainParticipant, action: str, order: int, timeout_s: float) -> dict:
@@ -470,6 +534,10 @@ def run_humble_node(participant: DomainParticipant, seconds: float) -> dict:
 def main(argv: list[str]) -> int:
     domain, mode, *args = argv
     participant = DomainParticipant(int(domain))
+    if mode == "params":
+        result = run_params(participant, args[0], float(args[1]))
+        print(json.dumps(result), flush=True)
+        return 0 if result["ok"] else 1
     if mode == "humble_node":
         print(json.dumps(run_humble_node(participant, float(args[0]))), flush=True)
         return 0

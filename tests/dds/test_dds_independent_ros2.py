@@ -194,3 +194,21 @@ async def test_ros_distro_selects_the_discovery_info_layout(
     else:
         assert len(publishers) == 1 and publishers[0].startswith("/dds_participant_")
         assert len(layout_notes) <= 1
+
+
+async def test_the_bridges_own_parameters_are_a_ros2_nodes(dds_domain, registry):
+    """`ros2 param`'s services on the bridge's node, answered from the rosapi parameters."""
+    config = BridgeConfig(
+        host="127.0.0.1", port=0, dds=True, dds_domain=dds_domain, dds_node="rb_bridge"
+    )
+    async with (
+        run_bridge(config) as bridge,
+        RosbridgeClient(bridge.url, registry=registry) as client,
+    ):
+        await client.call_service("/rosapi/set_param", {"name": "preset", "value": "7"})
+        answer = await run_peer(dds_domain, "params", "rb_bridge", "60")
+        gain = await client.call_service("/rosapi/get_param", {"name": "gain"})
+    assert answer["set"] == [[True, ""]]
+    assert answer["names"] == ["gain", "preset"]
+    assert answer["values"] == [[3, 2.5, 0], [2, 0.0, 7], [0, 0.0, 0]]
+    assert gain["value"] == "2.5"
