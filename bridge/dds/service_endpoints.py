@@ -12,11 +12,12 @@ from __future__ import annotations
 import itertools
 import logging
 import threading
+import time
 from collections import deque
 from collections.abc import Callable
 
 from bridge.dds import request_header
-from bridge.dds.naming import reply_topic, request_topic
+from bridge.dds.naming import ACTION_INFIX, reply_topic, request_topic
 from bridge.dds.participant import DdsPlumbing, RawReader, RawWriter
 from bridge.dds.qos import SERVICES
 from bridge.dds.request_header import RequestId
@@ -27,6 +28,9 @@ from schemas.values import Message
 logger = logging.getLogger("bridge.dds")
 
 Received = Callable[[str, RequestId, Message], object]  # (service, id, message)
+# A Fast DDS server's reply later than this is taken as lost (ServiceClient): above the
+# bridge's default call timeout (5 s), so a slow answer still reaches a waiting caller.
+STALE_S = 10.0
 
 
 def pairing_id(participant_guid: bytes, number: int) -> str:
@@ -151,7 +155,9 @@ class ServiceClient(_ServiceEndpoints):
     Towards a Fast DDS server (`request_header=False`) the request id travels in RTPS inline
     QoS, which Cyclone neither writes nor reads: requests then go one at a time and a reply
     answers the request in flight. A reply the server sends to another client of the same
-    service at that moment would be taken for ours (documented in docs/ros2.md).
+    service at that moment would be taken for ours (documented in docs/ros2.md). A request
+    unanswered for `STALE_S` (a server that lost it) gives its turn to the next one, except
+    an action's `get_result`, which answers only when its goal ends.
     """
 
     def __init__(
@@ -166,7 +172,9 @@ class ServiceClient(_ServiceEndpoints):
         self._sequence = itertools.count(1)
         self._lock = threading.Lock()  # requests come from the loop, replies on the pump
         self._in_flight: RequestId | None = None
+        self._in_flight_since = 0.0
         self._queued: deque[tuple[RequestId, Message]] = deque()
+        self._stale_s = None if service.endswith(ACTION_INFIX + "get_result") else STALE_S
 
     def request(self, msg: Message) -> RequestId:
         """Send a request; its reply comes back with the returned id."""
@@ -174,13 +182,21 @@ class ServiceClient(_ServiceEndpoints):
         if self.request_header:
             self.send(request, msg)
             return request
+        now_s = time.monotonic()
         with self._lock:
-            if self._in_flight is not None:
+            if self._in_flight is not None and not self._stale(now_s):
                 self._queued.append((request, msg))
                 return request
-            self._in_flight = request
+            if self._in_flight is not None:
+                logger.warning(
+                    "DDS: %s gave no reply in %g s; sending the next request", self.service, STALE_S
+                )
+            self._in_flight, self._in_flight_since = request, now_s
         self.send(request, msg)
         return request
+
+    def _stale(self, now_s: float) -> bool:
+        return self._stale_s is not None and now_s - self._in_flight_since > self._stale_s
 
     def _unwrap(self, sample: bytes) -> tuple[RequestId | None, bytes]:
         if self.request_header:
@@ -195,6 +211,7 @@ class ServiceClient(_ServiceEndpoints):
         with self._lock:
             following = self._queued.popleft() if self._queued else None
             self._in_flight = following[0] if following else None
+            self._in_flight_since = time.monotonic()
         if following is not None:
             self.send(*following)
 

@@ -20,7 +20,13 @@ from bridge.config import BridgeConfig
 from bridge.dds.cyclone_xml import CycloneSettings, cyclone_xml
 from clients import RosbridgeClient
 from tests.compat import roslibpy_support as rp
-from tests.dds.test_dds_rclpy import DISCOVERY_TIMEOUT_S, first, wait_for_action, wait_for_service
+from tests.dds.test_dds_rclpy import (
+    DISCOVERY_TIMEOUT_S,
+    assert_feedback_leads_to,
+    first,
+    wait_for_action,
+    wait_for_service,
+)
 
 pytestmark = pytest.mark.slow
 
@@ -115,7 +121,7 @@ async def test_an_independent_participants_action_parameters_and_sensor(dds_doma
         peer.kill()
         peer.communicate()
     assert outcome["done"]["values"] == {"sequence": [0, 1, 1, 2, 3]}
-    assert outcome["feedback"] == [[0, 1, 1], [0, 1, 1, 2], [0, 1, 1, 2, 3]]
+    assert_feedback_leads_to(outcome["feedback"], [0, 1, 1, 2, 3])
     assert outcome["stopped"]["status"] == roslibpy.core.GoalStatus.CANCELED
     assert outcome["errors"] == []
     assert gain == {"value": "1.5", "successful": True, "reason": ""}
@@ -148,7 +154,7 @@ async def test_an_independent_action_client_drives_a_websocket_clients_action(dd
     assert [dict(g) for g in goals] == [{"order": 5}]
     assert answer["accepted"] is True and answer["status"] == SUCCEEDED
     assert answer["sequence"] == [0, 1, 1, 2, 3, 5]
-    assert answer["feedback"][-1] == [0, 1, 1, 2, 3, 5]
+    assert_feedback_leads_to(answer["feedback"], [0, 1, 1, 2, 3, 5])
     assert answer["statuses"][-1] == [[list(range(1, 17)), SUCCEEDED]]
 
 
