@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import logging
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
@@ -17,7 +18,7 @@ from bridge.subscription import Release, Subscription
 from schemas.ops import OpBase, Status, to_wire
 from schemas.registry import TypeRegistry
 from schemas.safety import echo, safe_text
-from schemas.values import OpId
+from schemas.values import Message, OpId
 
 if TYPE_CHECKING:
     from bridge.inbound import InboundFrame
@@ -36,6 +37,8 @@ class PendingCall:
     caller_id: OpId
     caller_service: str
     timeout_s: float
+    # A rosapi call answered by another service: its response -> the rosapi response.
+    translate: Callable[[Message], Message] | None = None
 
 
 @dataclass

@@ -31,6 +31,8 @@ class TopicEntry:
     latched: TopicMessage | None = None
     # The `qos` object each publishing node advertised with (a DDS mirror's writer QoS).
     qos: dict[str, JsonObject] = field(default_factory=dict)
+    # The `qos` object each subscribing node subscribed with (a DDS mirror's reader QoS).
+    subscriber_qos: dict[str, JsonObject] = field(default_factory=dict)
 
     def is_unused(self) -> bool:
         return not self.publishers and not self.subscribers
@@ -130,6 +132,7 @@ class Graph:
         entry = self.topics.get(name)
         if entry is not None:
             entry.subscribers.discard(node)
+            entry.subscriber_qos.pop(node, None)
             self.forget_if_unused(name)
 
     def forget_if_unused(self, name: str) -> None:

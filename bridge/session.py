@@ -48,6 +48,8 @@ class ClientSession:
     actions: set[str] = field(default_factory=set)
     fragments: dict[str | int, FragmentBuffer] = field(default_factory=dict)
     problems: ProblemLog = field(default_factory=ProblemLog)
+    # Told once that ROS 1's header.seq is dropped (roslibpy's Header(seq=...)).
+    ros1_seq_noted: bool = False
     # False until a valid rosauth `auth` op when the bridge has an auth secret.
     authenticated: bool = True
     # Who it is (a token's subject, "" until it authenticates), its role and quota buckets

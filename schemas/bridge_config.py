@@ -158,8 +158,13 @@ class BridgeConfig(BaseModel):
             exists="dir",
         ),
     ] = ()
-    # ROS distribution reported by /rosapi/get_ros_version.
-    distro: str = "jazzy"
+    # ROS 2 distribution the bridge acts as: reported by /rosapi/get_ros_version, and on DDS
+    # the layout of ros_discovery_info (Humble's 24-byte GIDs, 16 since Jazzy) and whether
+    # endpoints carry a type hash (not in Humble); docs/ros2.md.
+    distro: Annotated[
+        Literal["humble", "jazzy", "kilted"],
+        Option("--ros-distro", DDS, "the ROS 2 distribution to act as: humble, jazzy or kilted"),
+    ] = "jazzy"
     # Built web dashboard served at http://host:port/; None = $RIVERBRIDGE_WEB_ROOT or the
     # repository's web/dist (bridge.webapp.default_web_root).
     web_root: Annotated[

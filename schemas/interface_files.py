@@ -10,6 +10,7 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 from rosbags.interfaces.typing import Typesdict
 from rosbags.typesys import get_types_from_msg
@@ -66,7 +67,50 @@ def parse_interface(pkg: str, kind: str, name: str, text: str) -> InterfaceSet:
         result.services[full_name] = (part_names[0], part_names[1])
     elif kind == "action":
         result.actions[full_name] = (part_names[0], part_names[1], part_names[2])
+        _add_action_wire_types(result, pkg, name)
     return result
+
+
+# What rosidl generates from an action for rcl_action's wire: the goal, result and feedback
+# wrapped with the goal's id, as two services and the feedback topic's message
+# (`<pkg>/action/<T>_SendGoal_Request` ... on DDS `<pkg>::action::dds_::<T>_SendGoal_Request_`).
+_ACTION_WIRE_PARTS = {
+    "_SendGoal_Request": "unique_identifier_msgs/UUID goal_id\n{part}_Goal goal",
+    "_SendGoal_Response": "bool accepted\nbuiltin_interfaces/Time stamp",
+    "_GetResult_Request": "unique_identifier_msgs/UUID goal_id",
+    "_GetResult_Response": "int8 status\n{part}_Result result",
+    "_FeedbackMessage": "unique_identifier_msgs/UUID goal_id\n{part}_Feedback feedback",
+}
+ACTION_SERVICES = ("_SendGoal", "_GetResult")
+
+
+def _add_action_wire_types(result: InterfaceSet, pkg: str, name: str) -> None:
+    """Register `_ACTION_WIRE_PARTS` of action `pkg/action/name` and its two services."""
+    parsed_part, action_part = f"{pkg}/msg/{name}", f"{pkg}/action/{name}"
+    for suffix, text in _ACTION_WIRE_PARTS.items():
+        parse_name = f"{parsed_part}{suffix}"
+        parsed = get_types_from_msg(text.format(part=f"{pkg}/{name}"), parse_name)
+        consts, fields = parsed.pop(parse_name)
+        # rosbags read `{pkg}/{name}_Goal` as a msg; the goal, result, feedback are action parts
+        result.types[f"{action_part}{suffix}"] = (
+            consts,
+            [
+                (field_name, _in_action(node, parsed_part, action_part))
+                for field_name, node in fields
+            ],
+        )
+    for service in ACTION_SERVICES:
+        result.services[f"{action_part}{service}"] = (
+            f"{action_part}{service}_Request",
+            f"{action_part}{service}_Response",
+        )
+
+
+def _in_action(node: Any, parsed_part: str, action_part: str) -> Any:
+    kind, detail = node
+    if isinstance(detail, str) and detail.startswith(parsed_part + "_"):
+        return (kind, action_part + detail[len(parsed_part) :])
+    return node
 
 
 def _package_dirs(root: Path) -> list[Path]:

@@ -4,7 +4,8 @@
 fields take defaults, unknown fields are errors, ints are accepted for floats but not the
 other way round, bools are strict, integers are range-checked, ``null`` for a float is NaN,
 ``uint8[]`` may come as base64 or a list, Time accepts ``sec``/``nanosec``, ``secs``/``nsecs``
-or ``"now"``, and a ``Header`` given without ``stamp`` is stamped ``now_ns``. Arrays that
+or ``"now"``, a ``Header`` given without ``stamp`` is stamped ``now_ns``, and ROS 1's
+``header.seq`` is dropped. Arrays that
 already have the canonical type (``bytes``, an ndarray of the exact dtype) pass through
 without a copy, so a 4 MB PointCloud2 costs microseconds.
 """
@@ -344,9 +345,21 @@ def _message(spec: MessageSpec, raw: JsonValue, now_ns: int) -> Message:
             exc.parts.append(field.name)
             raise
     if used != len(raw):
-        unknown = next(key for key in raw if key not in spec.by_name)
-        raise _FieldError(f"no such field in {spec.name}", [str(unknown)])
+        unknown = [key for key in raw if key not in spec.by_name]
+        if not (stamp_now and unknown == [ROS1_HEADER_SEQ]):
+            raise _FieldError(f"no such field in {spec.name}", [str(unknown[0])])
     return out
+
+
+# ROS 1's Header had a sequence number; ROS 2's has none. roslibpy's `Header(seq=...)` still
+# sends it: accepted and dropped (the bridge says so once per client, `has_ros1_header_seq`).
+ROS1_HEADER_SEQ = "seq"
+
+
+def has_ros1_header_seq(raw: JsonValue) -> bool:
+    """Whether a published message's top-level `header` carries ROS 1's `seq`."""
+    header = raw.get("header") if isinstance(raw, Mapping) else None
+    return isinstance(header, Mapping) and ROS1_HEADER_SEQ in header
 
 
 def normalize(spec: MessageSpec, raw: JsonValue, *, now_ns: int) -> Message:

@@ -130,7 +130,7 @@ class TypeRegistry:
 
     def service(self, name: str) -> ServiceSpec:
         """The spec of ``pkg/srv/T`` (or ``pkg/T``)."""
-        full = _with_kind(name, "srv")
+        full = _service_name(name)
         parts = self._services.get(full)
         if parts is None:
             raise UnknownTypeError(f"unknown service type {name!r}")
@@ -148,7 +148,7 @@ class TypeRegistry:
         return _never_raises(self._resolve_message_name, name)
 
     def has_service(self, name: object) -> bool:
-        return _never_raises(lambda n: self._services[_with_kind(n, "srv")], name)
+        return _never_raises(lambda n: self._services[_service_name(n)], name)
 
     def has_action(self, name: object) -> bool:
         return _never_raises(lambda n: self._actions[_with_kind(n, "action")], name)
@@ -251,6 +251,11 @@ def _with_kind(name: str, kind: str) -> str:
     full = normalize_type_name(name, kind)  # type: ignore[arg-type]
     pkg, _middle, leaf = full.split("/")
     return f"{pkg}/{kind}/{leaf}"
+
+
+def _service_name(name: str) -> str:
+    """`pkg/srv/T`; an action's own services (`pkg/action/T_SendGoal`) keep their kind."""
+    return name if name.count("/") == 2 and "/action/" in name else _with_kind(name, "srv")
 
 
 def _never_raises(lookup: Callable[[str], object], name: object) -> bool:

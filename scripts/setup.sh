@@ -32,3 +32,34 @@ fi
 # The web dashboard the bridge serves (web/dist), and playwright-core for its browser tests.
 npm ci --prefix web --no-audit --no-fund --loglevel=error >/dev/null
 npm run build --prefix web --silent >/dev/null
+
+# Real ROS 2 nodes for tests/dds/test_dds_rclpy.py: rclpy from PyPI's ros-<distro>-* wheels
+# (Python 3.12, rmw_fastrtps_cpp), one venv per distribution outside the checkout so that every
+# clone shares them; made once (~40 s and ~260 MB each), skipped when the package list matches.
+ros2_venvs="${RIVERBRIDGE_ROS2_VENVS:-$HOME/.cache/riverbridge}"
+python312=""
+for candidate in python3.12 "$(pyenv root 2>/dev/null || echo /root/.pyenv)"/versions/3.12*/bin/python3.12; do
+    if "$candidate" -c 'import sys; assert sys.version_info[:2] == (3, 12)' >/dev/null 2>&1; then
+        python312="$candidate"
+        break
+    fi
+done
+if [ -z "$python312" ]; then
+    echo "setup: no Python 3.12 found; the ROS 2 venvs of tests/dds are not made" >&2
+    exit 1
+fi
+for distro in jazzy kilted; do
+    venv="$ros2_venvs/ros2-$distro"
+    packages="ros-$distro-rclpy[fastrtps] ros-$distro-std-msgs ros-$distro-sensor-msgs"
+    packages+=" ros-$distro-geometry-msgs ros-$distro-std-srvs ros-$distro-test-msgs"
+    if [ "$(cat "$venv/.riverbridge-packages" 2>/dev/null)" = "$packages" ]; then
+        continue
+    fi
+    echo "setup: making the ROS 2 $distro venv in $venv" >&2
+    rm -rf "$venv"
+    "$python312" -m venv "$venv"
+    # shellcheck disable=SC2086  # the list is words
+    "$venv/bin/pip" install --quiet --disable-pip-version-check $packages 2>&1 \
+        | { grep -v "is ignored: it is neither a file nor a directory" || true; } >&2
+    echo "$packages" > "$venv/.riverbridge-packages"
+done

@@ -4,7 +4,7 @@ Each ROS 2 participant publishes a `rmw_dds_common/msg/ParticipantEntitiesInfo`
 (transient-local, keep-last 1): its GUID and, per node, the GUIDs of the readers and writers
 the node owns. ROS 2 tools (`ros2 node list`, `ros2 topic info`) name endpoints through it.
 The bridge announces one node that owns all its endpoints and reads the others' announcements
-so that rosapi can name remote nodes.
+so that rosapi can name remote nodes, in its distribution's layout (`discovery_info`).
 """
 
 from __future__ import annotations
@@ -12,42 +12,17 @@ from __future__ import annotations
 import logging
 from collections.abc import Callable, Sequence
 
-from bridge.dds.discovery import NodeEntities, nodes_from_discovery_info
+from bridge.dds import discovery_info
+from bridge.dds.discovery import NodeEntities
+from bridge.dds.discovery_info import GID_BYTES, GUID_BYTES, announcement
+from bridge.dds.idl_types import discovery_info_type
 from bridge.dds.naming import DISCOVERY_TOPIC, DISCOVERY_TYPE
 from bridge.dds.participant import DdsPlumbing
 from bridge.dds.qos import DISCOVERY, QosProfile
-from bridge.dds.topic_mirror import type_hash_user_data
-from schemas.codec_cdr import from_cdr, to_cdr
-from schemas.errors import SchemaError
-from schemas.values import Message
 
 logger = logging.getLogger("bridge.dds")
 
 NodeUpdate = Callable[[bytes, tuple[NodeEntities, ...]], object]
-
-
-def split_node_name(node: str) -> tuple[str, str]:
-    """`/riverbridge_1` -> (`/`, `riverbridge_1`); `/ns/n` -> (`/ns`, `n`)."""
-    namespace, _, name = node.rpartition("/")
-    return namespace or "/", name
-
-
-def participant_entities(
-    participant: bytes, node: str, readers: Sequence[bytes], writers: Sequence[bytes]
-) -> Message:
-    """The canonical ParticipantEntitiesInfo announcing `node` with these endpoints."""
-    namespace, name = split_node_name(node)
-    return {
-        "gid": {"data": participant},
-        "node_entities_info_seq": [
-            {
-                "node_namespace": namespace,
-                "node_name": name,
-                "reader_gid_seq": [{"data": guid} for guid in readers],
-                "writer_gid_seq": [{"data": guid} for guid in writers],
-            }
-        ],
-    }
 
 
 class Announcer:
@@ -62,9 +37,9 @@ class Announcer:
         self._dds = dds
         self.node = node
         self._on_nodes = on_nodes  # called on the pump thread
-        participant, registry = dds.participant, dds.registry
-        data_type = participant.types.message(registry.message(DISCOVERY_TYPE))
-        user_data = type_hash_user_data(registry, DISCOVERY_TYPE)
+        participant = dds.participant
+        data_type = discovery_info_type(GID_BYTES[dds.distro])
+        user_data = dds.type_hash(DISCOVERY_TYPE)
         self._writer = participant.writer(DISCOVERY_TOPIC, data_type, DISCOVERY, user_data)
         # rmw_cyclonedds reads it keep-all; any depth works as each participant sends its own.
         self._reader = participant.reader(
@@ -72,6 +47,7 @@ class Announcer:
         )
         dds.pump.watch(self._reader.condition, self._take)
         self._last: tuple[tuple[bytes, ...], tuple[bytes, ...]] | None = None
+        self._warned = False
 
     def own_endpoints(self) -> tuple[list[bytes], list[bytes]]:
         return [self._reader.guid], [self._writer.guid]
@@ -83,8 +59,8 @@ class Announcer:
         if current == self._last:
             return
         self._last = current
-        msg = participant_entities(self._dds.participant.guid, self.node, *current)
-        cdr = to_cdr(self._dds.registry, DISCOVERY_TYPE, msg)
+        info = announcement(self._dds.participant.guid, self.node, *current)
+        cdr = discovery_info.encode(info, self._dds.distro)
 
         def write() -> None:
             self._writer.write(cdr)
@@ -99,15 +75,24 @@ class Announcer:
         def decode() -> None:
             for sample in samples:
                 try:
-                    msg = from_cdr(self._dds.registry, DISCOVERY_TYPE, sample.data)
-                except SchemaError as exc:
-                    logger.debug("DDS: unreadable ros_discovery_info: %s", exc)
+                    info = discovery_info.decode(sample.data, self._dds.distro)
+                except ValueError as exc:  # e.g. another distribution's layout
+                    self._unreadable(exc)
                     continue
-                participant, nodes = nodes_from_discovery_info(msg)
-                if participant != self._dds.participant.guid:
-                    self._on_nodes(participant, nodes)
+                if info.participant != self._dds.participant.guid[:GUID_BYTES]:
+                    self._on_nodes(info.participant, info.nodes)
 
         return decode
+
+    def _unreadable(self, exc: ValueError) -> None:
+        if not self._warned:
+            self._warned = True
+            logger.warning(
+                "DDS: a ros_discovery_info sample is not in the %s layout (%s); is a node of "
+                "another ROS 2 distribution on the domain? (--ros-distro)",
+                self._dds.distro,
+                exc,
+            )
 
     def close(self) -> None:
         self._dds.pump.unwatch(self._reader.condition)

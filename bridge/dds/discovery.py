@@ -10,17 +10,15 @@ name made from the participant: `/dds_participant_<8 hex digits>`. Pure: no Cycl
 from __future__ import annotations
 
 import zlib
-from collections.abc import Iterable
 from dataclasses import dataclass, field
 
 from bridge.dds.naming import (
-    node_name,
+    action_of_send_goal,
     parse_dds_topic,
     service_type_of_part,
     type_from_dds,
 )
 from bridge.dds.qos import DEFAULT, QosProfile
-from schemas.values import Message
 
 
 @dataclass(frozen=True)
@@ -66,33 +64,40 @@ class RemoteTopic:
 
 @dataclass(frozen=True)
 class RemoteService:
-    """A ROS service server seen on the domain (request reader + reply writer of one node)."""
+    """A ROS service server seen on the domain (request reader + reply writer of one node).
+
+    `request_header`: whether its samples carry rmw_cyclonedds's request header; Fast DDS's
+    rmw keeps the request id in RTPS inline QoS instead, and its payload is the bare request.
+    """
 
     name: str
     type_name: str
     node: str
+    request_header: bool = True
+
+
+@dataclass(frozen=True)
+class RemoteAction:
+    """A ROS 2 action server on the domain: the node serving `<name>/_action/send_goal`."""
+
+    name: str
+    type_name: str  # pkg/action/T
+    node: str
+    request_header: bool = True
+
+
+# RTPS GUID prefixes start with the vendor id; eProsima Fast DDS is 01.0f (OMG's vendor list).
+FAST_DDS_VENDOR = b"\x01\x0f"
+
+
+def is_fast_dds(participant: bytes) -> bool:
+    """A participant of eProsima Fast DDS (rmw_fastrtps_cpp, the ROS 2 default)."""
+    return participant[:2] == FAST_DDS_VENDOR
 
 
 def participant_node(participant: bytes) -> str:
     """The node name given to endpoints of a participant that announces no nodes."""
     return f"/dds_participant_{zlib.crc32(participant[:12]):08x}"
-
-
-def nodes_from_discovery_info(msg: Message) -> tuple[bytes, tuple[NodeEntities, ...]]:
-    """(participant gid, its nodes) from a canonical `ParticipantEntitiesInfo` message."""
-
-    def gids(items: Iterable[Message]) -> frozenset[bytes]:
-        return frozenset(bytes(item["data"]) for item in items)
-
-    nodes = tuple(
-        NodeEntities(
-            node_name(n["node_namespace"], n["node_name"]),
-            gids(n["reader_gid_seq"]),
-            gids(n["writer_gid_seq"]),
-        )
-        for n in msg["node_entities_info_seq"]
-    )
-    return bytes(msg["gid"]["data"]), nodes
 
 
 class DomainView:
@@ -153,6 +158,7 @@ class DomainView:
         """Service servers: a node with a reader on `rq/<s>Request` and a writer on
         `rr/<s>Reply`."""
         requests: dict[tuple[str, str], str] = {}
+        fast_dds: set[tuple[str, str]] = set()
         replies: set[tuple[str, str]] = set()
         for endpoint in self.snapshot.endpoints:
             meaning = parse_dds_topic(endpoint.dds_topic)
@@ -163,10 +169,22 @@ class DomainView:
             key = (meaning.ros_name, self.owner(endpoint))
             if meaning.role == "request" and not endpoint.is_writer:
                 requests[key] = split[0]
+                if is_fast_dds(endpoint.participant):
+                    fast_dds.add(key)
             elif meaning.role == "reply" and endpoint.is_writer:
                 replies.add(key)
         servers: dict[str, RemoteService] = {}
         for (name, node), type_name in sorted(requests.items()):
             if (name, node) in replies and name not in servers:
-                servers[name] = RemoteService(name, type_name, node)
+                servers[name] = RemoteService(name, type_name, node, (name, node) not in fast_dds)
         return servers
+
+    def actions(self) -> dict[str, RemoteAction]:
+        """Action servers: whoever serves an action's `send_goal` service."""
+        found: dict[str, RemoteAction] = {}
+        for service in self.services().values():
+            action = action_of_send_goal(service.name, service.type_name)
+            if action is not None:
+                name, type_name = action
+                found[name] = RemoteAction(name, type_name, service.node, service.request_header)
+        return found

@@ -115,3 +115,27 @@ class IdlTypes:
         if field.array == "sequence":
             return _sequence[element]
         return element
+
+
+def discovery_info_type(gid_bytes: int) -> type[IdlStruct]:
+    """`rmw_dds_common::msg::dds_::ParticipantEntitiesInfo_` with GIDs of `gid_bytes` (24 in
+    Humble, 16 since Jazzy: `bridge.dds.discovery_info`); the registry knows only Jazzy's."""
+    suffix = f"_gid{gid_bytes}"
+    gid = make_idl_struct(
+        "Gid" + suffix, "rmw_dds_common::msg::dds_::Gid_", {"data": _array[idl.uint8, gid_bytes]}
+    )
+    node = make_idl_struct(
+        "NodeEntitiesInfo" + suffix,
+        "rmw_dds_common::msg::dds_::NodeEntitiesInfo_",
+        {
+            "node_namespace": _bounded_str[256],
+            "node_name": _bounded_str[256],
+            "reader_gid_seq": _sequence[gid],
+            "writer_gid_seq": _sequence[gid],
+        },
+    )
+    return make_idl_struct(
+        "ParticipantEntitiesInfo" + suffix,
+        "rmw_dds_common::msg::dds_::ParticipantEntitiesInfo_",
+        {"gid": gid, "node_entities_info_seq": _sequence[node]},
+    )

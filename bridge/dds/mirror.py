@@ -27,6 +27,7 @@ import logging
 from collections.abc import Callable
 from typing import TYPE_CHECKING
 
+from bridge.dds.action_mirror import ActionMirror
 from bridge.dds.announce import Announcer
 from bridge.dds.cyclone_xml import CycloneSettings
 from bridge.dds.discovery import (
@@ -38,8 +39,15 @@ from bridge.dds.discovery import (
 )
 from bridge.dds.graph_sync import GraphSync
 from bridge.dds.outbox import Outbox, WriterThread
+from bridge.dds.param_node import ParamNode
 from bridge.dds.participant import DdsParticipant, DdsPlumbing, Pump
-from bridge.dds.qos import QosProfile, advertised_profile, reader_profile, strongest
+from bridge.dds.qos import (
+    QosError,
+    QosProfile,
+    advertised_profile,
+    reader_profile,
+    strongest,
+)
 from bridge.dds.service_mirror import ServiceMirror
 from bridge.dds.topic_mirror import Arrival, TopicMirror, Wanted
 from bridge.errors import BridgeError, DdsStartError
@@ -112,9 +120,13 @@ class DdsMirror:
         self.writer = WriterThread(self.outbox)
         self.pump = Pump(self.participant)
         to_loop = loop.call_soon_threadsafe
-        dds = DdsPlumbing(self.participant, self.pump, self.outbox, self.registry)
+        dds = DdsPlumbing(
+            self.participant, self.pump, self.outbox, self.registry, self.config.distro
+        )
         self.topics = TopicMirror(dds, lambda arrivals: to_loop(self._inject, arrivals))
         self.services = ServiceMirror(self.host, dds, self.node, to_loop)
+        self.actions = ActionMirror(self.host, self.node, self.services.client_ids, dds, to_loop)
+        self.params = ParamNode(self.host, dds, self.node, self.services.client_ids, to_loop)
         self.announcer = Announcer(dds, self.node, lambda p, n: to_loop(self._nodes_seen, p, n))
         for condition in self.participant.discovery_conditions:
             self.pump.watch(condition, self._take_discovery)
@@ -127,6 +139,8 @@ class DdsMirror:
         self.host.remove_sink(self)
         self.pump.stop()
         self.writer.stop()
+        self.actions.close()
+        self.params.close()
         self.services.close()
         self.topics.close()
         self.announcer.close()
@@ -223,9 +237,21 @@ class DdsMirror:
             if entry.provider in local and entry.type_name
         }
         self.services.sync(provided, self.view.services())
+        local_actions = {
+            name: entry.type_name
+            for name, entry in graph.actions.items()
+            if entry.provider in local and entry.type_name
+        }
+        self.actions.sync(self.view.actions(), set(self.services.clients), set(local_actions))
+        self.actions.sync_local(local_actions)
         topic_readers, topic_writers = self.topics.endpoint_guids()
         service_readers, service_writers = self.services.guids()
-        self.announcer.announce(topic_readers + service_readers, topic_writers + service_writers)
+        action_readers, action_writers = self.actions.guids()
+        param_readers, param_writers = self.params.guids()
+        self.announcer.announce(
+            topic_readers + service_readers + action_readers + param_readers,
+            topic_writers + service_writers + action_writers + param_writers,
+        )
 
     def _domain_nodes(self, remote_topics: dict[str, RemoteTopic], local: set[str]) -> set[str]:
         """The nodes this mirror speaks for: the domain's (what it injected, what it lists)."""
@@ -248,11 +274,26 @@ class DdsMirror:
             if publishing:
                 profiles = [self._advertised(entry, node) for node in publishing]
                 writers[entry.name] = Wanted(entry.type_name, strongest(profiles))
-            if any(node in local for node in entry.subscribers):
+            if any(node in local or node == self.actions.node for node in entry.subscribers):
                 seen = remote.get(entry.name)
                 offered = [p for ps in seen.publishers.values() for p in ps] if seen else []
-                readers[entry.name] = Wanted(entry.type_name, reader_profile(offered))
+                readers[entry.name] = Wanted(entry.type_name, self._reading(entry, offered))
         return writers, readers
+
+    def _reading(self, entry: TopicEntry, offered: list[QosProfile]) -> QosProfile:
+        """The reader profile: adapted to the writers, or as the subscribers' `qos` asks."""
+        try:
+            return reader_profile(offered, entry.subscriber_qos.values())
+        except QosError as exc:
+            if (entry.name, "subscribe") not in self._qos_warned:
+                self._qos_warned.add((entry.name, "subscribe"))
+                logger.warning(
+                    "[%s] op=subscribe topic=%s: %s; the DDS reader adapts to the writers",
+                    ", ".join(sorted(entry.subscriber_qos)),
+                    entry.name,
+                    exc,
+                )
+            return reader_profile(offered)
 
     def _advertised(self, entry: TopicEntry, node: str) -> QosProfile:
         profile, problem = advertised_profile(node in entry.latching, entry.qos.get(node))

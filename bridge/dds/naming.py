@@ -79,11 +79,34 @@ def type_from_dds(dds_type: str) -> str | None:
 
 
 def service_type_of_part(part_type: str) -> tuple[str, str] | None:
-    """`pkg/srv/T_Request` -> (`pkg/srv/T`, "request"); `…_Response` -> "response"."""
+    """`pkg/srv/T_Request` -> (`pkg/srv/T`, "request"); `…_Response` -> "response"; also an
+    action's own services (`pkg/action/T_SendGoal_Request` -> `pkg/action/T_SendGoal`)."""
     for suffix, which in (("_Request", "request"), ("_Response", "response")):
-        if part_type.endswith(suffix) and "/srv/" in part_type:
+        if part_type.endswith(suffix) and ("/srv/" in part_type or "/action/" in part_type):
             return part_type[: -len(suffix)], which
     return None
+
+
+# rcl_action's names: action `/fibonacci` is the services `/fibonacci/_action/send_goal`,
+# `…/get_result`, `…/cancel_goal` and the topics `…/feedback`, `…/status`.
+ACTION_INFIX = "/_action/"
+SEND_GOAL_SUFFIX = "_SendGoal"
+
+
+def action_part(action: str, part: str) -> str:
+    """(`/fibonacci`, `send_goal`) -> `/fibonacci/_action/send_goal`."""
+    return _absolute(action).rstrip("/") + ACTION_INFIX + part
+
+
+def action_of_send_goal(service: str, service_type: str) -> tuple[str, str] | None:
+    """(`/fibonacci/_action/send_goal`, `pkg/action/Fibonacci_SendGoal`) ->
+    (`/fibonacci`, `pkg/action/Fibonacci`); None for any other service."""
+    action, infix, part = service.rpartition(ACTION_INFIX)
+    if not action or part != "send_goal" or not infix:
+        return None
+    if "/action/" not in service_type or not service_type.endswith(SEND_GOAL_SUFFIX):
+        return None
+    return action, service_type[: -len(SEND_GOAL_SUFFIX)]
 
 
 def node_name(namespace: str, name: str) -> str:

@@ -387,3 +387,13 @@ class DdsPlumbing:
     pump: Pump
     outbox: Outbox
     registry: TypeRegistry
+    distro: str = "jazzy"  # --ros-distro: Humble's endpoints carry no type hash
+
+    def type_hash(self, type_name: str) -> str:
+        """The endpoint user data naming `type_name`'s hash (REP 2011, Iron and later)."""
+        if self.distro == "humble":
+            return ""
+        try:
+            return f"typehash={self.registry.typestore.hash_rihs01(type_name)};"
+        except Exception:  # older rosbags or a type it cannot hash: the hash is informational
+            return ""

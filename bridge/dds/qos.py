@@ -5,7 +5,8 @@ keep-last 1 for a latched advertisement, or what the advertise op's `qos` object
 (rosbridge PR #1150: `history`, `depth`, `reliability`, `durability`; `best_available` means
 the stronger policy for a writer). Readers adapt to the writers they will meet, like
 rosbridge's subscriptions: best effort if any writer is best effort (a reliable reader never
-matches one), transient-local only if every writer keeps history.
+matches one), transient-local only if every writer keeps history, unless a subscribe op's
+`qos` object (rosbridge's shape too) asks for a policy.
 """
 
 from __future__ import annotations
@@ -103,13 +104,51 @@ def _choice(qos: Mapping[str, Any], key: str, table: Mapping[str, bool], default
 READER_DEPTH = 64
 
 
-def reader_profile(writers: Iterable[QosProfile]) -> QosProfile:
-    """A reader profile that matches every writer in `writers` (reliable, volatile if none)."""
+def reader_profile(
+    writers: Iterable[QosProfile], requests: Iterable[Mapping[str, Any]] = ()
+) -> QosProfile:
+    """A reader profile that matches every writer in `writers` (reliable, volatile if none),
+    unless the local subscribers' `qos` objects (rosbridge's subscribe `qos`) ask otherwise.
+
+    One reader serves every local subscriber: a policy one of them asks for explicitly
+    replaces the adaptive choice (`best_effort` wins over `reliable`, as it matches more
+    writers; `transient_local` then reads only writers that keep history, as in ROS 2);
+    `best_available` and `system_default` keep adapting. `depth` may enlarge the buffer.
+    Raises QosError for a value ROS 2 does not have.
+    """
     known = list(writers)
-    return QosProfile(
-        reliable=all(w.reliable for w in known),
-        transient_local=bool(known) and all(w.transient_local for w in known),
-        depth=READER_DEPTH,
+    reliable = all(w.reliable for w in known)
+    transient_local = bool(known) and all(w.transient_local for w in known)
+    depth = READER_DEPTH
+    asked = [_reader_request(qos) for qos in requests]
+    reliabilities = {r for r, _, _ in asked if r is not None}
+    if reliabilities:
+        reliable = all(reliabilities)
+    durabilities = {d for _, d, _ in asked if d is not None}
+    if durabilities:
+        transient_local = any(durabilities)
+    depth = max([depth, *(n for _, _, n in asked if n is not None)])
+    return QosProfile(reliable, transient_local, depth)
+
+
+_READER_CHOICES = {
+    "reliable": True,
+    "best_effort": False,
+    "transient_local": True,
+    "volatile": False,
+}
+
+
+def _reader_request(qos: Mapping[str, Any]) -> tuple[bool | None, bool | None, int | None]:
+    """(reliable, transient_local, depth) a subscribe `qos` asks for; None = adapt."""
+    reliability, durability = qos.get("reliability"), qos.get("durability")
+    _choice(qos, "reliability", _RELIABILITY, True)  # refuses unknown values
+    _choice(qos, "durability", _DURABILITY, False)
+    depth = writer_profile(False, qos).depth if "depth" in qos else None
+    return (
+        _READER_CHOICES.get(reliability) if reliability in ("reliable", "best_effort") else None,
+        _READER_CHOICES.get(durability) if durability in ("transient_local", "volatile") else None,
+        depth or None,
     )
 
 

@@ -84,7 +84,12 @@ class ServiceMirror:
         return changed
 
     def _open(
-        self, kind: type[EndpointT], name: str, type_name: str, received: Received
+        self,
+        kind: type[EndpointT],
+        name: str,
+        type_name: str,
+        received: Received,
+        request_header: bool = True,
     ) -> EndpointT | None:
         try:
             return kind(
@@ -92,6 +97,7 @@ class ServiceMirror:
                 name,
                 type_name,
                 lambda *args: self._to_loop(received, *args),
+                request_header,
             )
         except (SchemaError, ValueError) as exc:  # an unknown type, a Cyclone refusal
             if name not in self._refused:
@@ -107,7 +113,9 @@ class ServiceMirror:
             if s.client_id not in self.client_ids
         ):
             return False  # a websocket client has that node name; never impersonate it
-        client = self._open(ServiceClient, service.name, service.type_name, self._on_reply)
+        client = self._open(
+            ServiceClient, service.name, service.type_name, self._on_reply, service.request_header
+        )
         if client is None:
             return False
         stand_in = self.stand_ins.get(service.node)

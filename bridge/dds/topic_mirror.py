@@ -149,7 +149,7 @@ class TopicMirror:
                 topic_to_dds(topic),
                 data_type,
                 wanted.profile,
-                type_hash_user_data(self._dds.registry, wanted.type_name),
+                self._dds.type_hash(wanted.type_name),
             )
         except Exception as exc:  # Cyclone refuses e.g. a second type on one topic name
             self._refuse(topic, wanted.type_name, f"cannot create a DDS {kind}: {exc}")

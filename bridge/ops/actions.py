@@ -80,6 +80,14 @@ def action_name(ctx: Context, raw: str) -> str:
     return name
 
 
+def same_action_type(asked: str, served: str) -> bool:
+    """Whether a goal's `action_type` names the server's type (`pkg/T` or `pkg/action/T`);
+    a type string that is no ROS 2 name (ROS 1 habits) is not held against the goal."""
+    if not is_valid_type_name(asked):
+        return True
+    return normalize_type_name(asked, "action") == served
+
+
 def forward_goal(ctx: Context, session: ClientSession, op: SendActionGoal) -> None:
     name = action_name(ctx, op.action)
     entry = ctx.state.graph.actions.get(name)
@@ -87,6 +95,8 @@ def forward_goal(ctx: Context, session: ClientSession, op: SendActionGoal) -> No
     if entry is None or provider is None:
         raise OpFailure(f"Action {name} does not exist")
     type_name = entry.type_name or op.action_type
+    if entry.type_name and not same_action_type(op.action_type, entry.type_name):
+        raise OpFailure(f"Action {name} is {entry.type_name}, not {op.action_type}")
     args = filled(ctx, action_spec_part(ctx, type_name, "goal"), op.args)
     entry.goals_sent += 1
     goal_id = f"action_goal:{entry.spelling}:{entry.goals_sent}"

@@ -10,11 +10,11 @@ when the service is unknown, the call times out, or the provider unadvertises or
 from __future__ import annotations
 
 from bridge.context import Context, PendingCall
-from bridge.errors import BridgeError, OpFailure
+from bridge.errors import BridgeError, OpFailure, RosapiError
 from bridge.graph import ServiceEntry
 from bridge.names import absolute_name, allowed
 from bridge.ops import route
-from bridge.rosapi.common import RosapiService
+from bridge.rosapi.common import Forward, RosapiService
 from bridge.session import ClientSession
 from schemas.errors import SchemaError
 from schemas.message import normalize
@@ -80,6 +80,14 @@ def answer_rosapi(ctx: Context, service: RosapiService, args: JsonValue) -> Mess
     )
 
 
+def forwarded(ctx: Context, service: RosapiService, args: JsonValue) -> Forward | None:
+    """Where a rosapi call is answered by another service (another node's parameters)."""
+    if service.forward is None:
+        return None
+    srv = ctx.state.registry.service(service.type_name)
+    return service.forward(ctx, fill_message(ctx, srv.request, args))
+
+
 def handle_call_service(ctx: Context, session: ClientSession, op: CallService) -> None:
     name_part, _, suffix = op.service.partition("#")
     call_id = op.id if op.id is not None else reply_id(suffix or None)  # a long one: none
@@ -99,15 +107,18 @@ def call(
 ) -> Message | None:
     """Answer a rosapi call (returns its values) or forward it to a provider (returns None)."""
     rosapi = ctx.state.rosapi.get(name)
-    if rosapi is not None:
+    forward = forwarded(ctx, rosapi, op.args) if rosapi is not None else None
+    if rosapi is not None and forward is None:
         return answer_rosapi(ctx, rosapi, op.args)
+    if forward is not None:
+        name = forward.service
     if not allowed(name, ctx.state.config.services_glob):
         raise OpFailure(f"Service {name} is not allowed by services_glob")
     entry = ctx.state.graph.services.get(name)
     provider = ctx.state.session_of_node(entry.provider) if entry else None
     if entry is None or provider is None:
         raise OpFailure(f"Service {name} does not exist")
-    args = request_fields(ctx, entry.type_name, op.args)
+    args = request_fields(ctx, entry.type_name, forward.args if forward else op.args)
     entry.requests_sent += 1
     request_id = f"service_request:{entry.spelling}:{entry.requests_sent}"
     timeout_s = (
@@ -116,7 +127,13 @@ def call(
         else ctx.state.config.call_timeout_s
     )
     ctx.state.pending_calls[request_id] = PendingCall(
-        name, provider.client_id, session.client_id, call_id, op.service, timeout_s
+        name,
+        provider.client_id,
+        session.client_id,
+        call_id,
+        op.service,
+        timeout_s,
+        forward.translate if forward else None,
     )
     ctx.send(provider.client_id, CallService(id=request_id, service=entry.spelling, args=args))
     ctx.schedule(("call", request_id), ctx.now_ns + int(timeout_s * NS_PER_S))
@@ -149,7 +166,9 @@ def settle(
     entry = ctx.state.graph.services.get(pending.service)
     try:
         answer = response_values(ctx, entry, values, result)
-    except OpFailure as exc:
+        if pending.translate is not None and isinstance(answer, dict):
+            answer = pending.translate(answer)
+    except (OpFailure, RosapiError) as exc:
         ctx.problem(session, "service_response", None, str(exc))
         finish(ctx, pending, f"Service {pending.service} answered badly: {exc}", False)
         return

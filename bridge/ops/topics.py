@@ -15,6 +15,7 @@ from bridge.subscription import SubscribeSettings, Subscription
 from bridge.validation import CheckedMessage, InvalidMessage, check_message
 from schemas.codec_png import PNG_NEEDS, png_available
 from schemas.errors import SchemaError
+from schemas.message import has_ros1_header_seq
 from schemas.ops import (
     Advertise,
     PublishFields,
@@ -66,12 +67,20 @@ def handle_unadvertise(ctx: Context, session: ClientSession, op: Unadvertise) ->
         session.published.discard(name)
 
 
+ROS1_SEQ_NOTE = (
+    "header.seq is ROS 1's (a ROS 2 Header has none): dropped, in this client's later messages too"
+)
+
+
 def handle_publish(ctx: Context, session: ClientSession, op: PublishFields) -> None:
     name = topic_name(ctx, op.topic)
     entry, type_name = publishing_entry(ctx, session, name, op)
     checked = checked_message(ctx, ctx.state.registry.message(type_name), op)
     if isinstance(checked, InvalidMessage):
         raise OpFailure(f"message dropped: {checked.problem}")
+    if not session.ros1_seq_noted and has_ros1_header_seq(op.msg):
+        session.ros1_seq_noted = True
+        ctx.problem(session, "publish", op.id, ROS1_SEQ_NOTE, StatusLevel.WARNING)
     message = TopicMessage(
         name,
         checked.spec.name,
@@ -140,6 +149,8 @@ def handle_subscribe(ctx: Context, session: ClientSession, op: Subscribe) -> Non
         ctx.state.topic_subscriptions.setdefault(name, {})[session.client_id] = subscription
         graph.add_subscriber(name, session.node)
     subscription.spelling = op.topic
+    if op.qos:
+        entry.subscriber_qos[session.node] = op.qos
     settings = subscribe_settings(op)
     if settings.compression == PNG and not png_available():
         ctx.problem(session, "subscribe", op.id, f"{PNG_NEEDS}; sending JSON", StatusLevel.WARNING)

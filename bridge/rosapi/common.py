@@ -16,11 +16,28 @@ RosapiHandler = Callable[[Context, Message], Message]
 
 
 @dataclass(frozen=True)
+class Forward:
+    """Answer a rosapi call by calling `service` with `args`; `translate` makes that
+    service's response the rosapi response (raising RosapiError fails the call with its
+    text). Used for other nodes' parameters (`bridge.rosapi.node_params`)."""
+
+    service: str
+    args: Message
+    translate: Callable[[Message], Message]
+
+
+#: `(ctx, request) -> Forward | None`: None answers the call with the handler as usual.
+Forwarder = Callable[[Context, Message], Forward | None]
+
+
+@dataclass(frozen=True)
 class RosapiService:
-    """One rosapi service: its `rosapi_msgs/srv/*` type and its handler."""
+    """One rosapi service: its `rosapi_msgs/srv/*` type, its handler and, for services
+    that may be answered by another service, the request's forwarder."""
 
     type_name: str
     handler: RosapiHandler
+    forward: Forwarder | None = None
 
 
 def text_arg(request: Message, field: str) -> str:

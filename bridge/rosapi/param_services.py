@@ -1,13 +1,17 @@
-"""rosapi parameter services, kept in the bridge (ROS 2 names look like `/node:param`).
+"""rosapi parameter services: the bridge's own, kept in the bridge, and other nodes'
+(`/node:param`, asked of that node through `bridge.rosapi.node_params`).
 
 Values are JSON text both ways, as rosapi clients `json.loads` / `JSON.parse` them.
 """
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 from bridge.context import Context
 from bridge.errors import RosapiError
 from bridge.rosapi.common import table, text_arg
+from bridge.rosapi.node_params import forward_get_param, forward_has_param, forward_set_param
 from schemas import codec_json
 from schemas.errors import DecodeError
 from schemas.safety import echo
@@ -82,3 +86,10 @@ SERVICES = table(
         "get_param_names": ("GetParamNames", get_param_names),
     },
 )
+# `node_name:param_name` is another node's parameter: asked of that node (rosbridge on ROS 2).
+for _name, _forward in (
+    ("get_param", forward_get_param),
+    ("set_param", forward_set_param),
+    ("has_param", forward_has_param),
+):
+    SERVICES[f"{PREFIX}/{_name}"] = replace(SERVICES[f"{PREFIX}/{_name}"], forward=_forward)

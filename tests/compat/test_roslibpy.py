@@ -67,6 +67,25 @@ def test_point_stamped_with_ros2_header_keeps_stamp_and_frame(open_ros) -> None:
     assert message["point"] == point
 
 
+def test_ros1_header_seq_is_dropped_with_one_line_per_client(bridge, open_ros) -> None:
+    """roslibpy's `Header(seq=...)` (ROS 1, as its own test suite still sends): accepted,
+    the seq dropped, the client told once in the log however many it sends."""
+    listener_ros, talker_ros = open_ros(), open_ros()
+    inbox = rp.Inbox()
+    roslibpy.Topic(listener_ros, "/points1", "geometry_msgs/PointStamped").subscribe(inbox)
+    rp.barrier(listener_ros)
+    talker = roslibpy.Topic(talker_ros, "/points1", "geometry_msgs/PointStamped")
+    for seq in (1, 2):
+        header = roslibpy.Header(seq=seq, stamp=roslibpy.Time(7, 8), frame_id="map")
+        talker.publish(roslibpy.Message({"header": header, "point": {"x": 1.0}}))
+
+    first, second = inbox.expect(2)
+    assert first["header"] == {"stamp": {"sec": 7, "nanosec": 8}, "frame_id": "map"}
+    assert second["point"]["x"] == 1.0
+    notes = [line for line in bridge.log.text().splitlines() if "header.seq" in line]
+    assert len(notes) == 1 and "op=publish" in notes[0], bridge.log.text()
+
+
 def test_non_finite_floats_from_roslibpy_arrive_as_null(open_ros) -> None:
     """roslibpy writes bare NaN/Infinity tokens (json.dumps); rosbridge ROS 2 sends null."""
     listener_ros, talker_ros = open_ros(), open_ros()

@@ -16,8 +16,13 @@ _DOMAINS = list(range(FIRST_TEST_DOMAIN, LAST_TEST_DOMAIN + 1))
 random.Random(os.getpid() ^ time.time_ns()).shuffle(_DOMAINS)
 
 
-@pytest.fixture
-def dds_domain() -> int:
+def take_domain() -> int:
     """A domain id unlikely to be used by anything else on this machine right now (and not
     by an earlier test of this session, whose participants may linger in other processes)."""
     return _DOMAINS.pop()
+
+
+@pytest.fixture
+def dds_domain() -> int:
+    """`take_domain()` for one test."""
+    return take_domain()

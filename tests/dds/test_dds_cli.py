@@ -55,6 +55,8 @@ def test_environment_gives_defaults_and_options_win(monkeypatch):
     assert config.dds_peers == ("10.0.0.2", "10.0.0.3")
     config = bridge_config(["--domain", "8", "--dds-peer", "10.0.0.9"])
     assert config.dds_domain == 8 and config.dds_peers == ("10.0.0.9",)
+    assert config.distro == "jazzy"
+    assert bridge_config(["--ros-distro", "humble"]).distro == "humble"
 
 
 @pytest.mark.parametrize(
@@ -66,6 +68,7 @@ def test_environment_gives_defaults_and_options_win(monkeypatch):
         (["--dds", "--dds-peer", "10.0.0.2 10.0.0.3"], {}, "dds_peers"),
         (["--dds", "--dds-multicast", "maybe"], {}, "--dds-multicast"),
         (["--dds", "--dds-node", "not a name"], {}, "dds_node"),
+        (["--dds", "--ros-distro", "rolling"], {}, "--ros-distro"),
         (["--dds"], {"ROS_DOMAIN_ID": "many"}, "ROS_DOMAIN_ID"),
         (["--dds"], {"RIVERBRIDGE_DDS": "perhaps"}, "RIVERBRIDGE_DDS"),
     ],

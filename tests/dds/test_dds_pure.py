@@ -9,9 +9,10 @@ import pytest
 
 from bridge.config import BridgeConfig
 from bridge.core import BridgeCore
-from bridge.dds import naming, request_header
+from bridge.dds import discovery_info, naming, request_header
 from bridge.dds.cyclone_xml import CycloneSettings, cyclone_xml
 from bridge.dds.discovery import DomainView, Endpoint, NodeEntities, Snapshot, participant_node
+from bridge.dds.discovery_info import ParticipantInfo
 from bridge.dds.graph_sync import GraphSync
 from bridge.dds.outbox import Outbox
 from bridge.dds.qos import (
@@ -106,6 +107,26 @@ def test_reader_qos_adapts_to_the_writers_it_must_match():
     assert reader_profile([latched, DEFAULT]).transient_local is False
     assert strongest([best_effort, latched]) == QosProfile(True, True, 5)
     assert strongest([DEFAULT, QosProfile(depth=0)]).depth == 0
+
+
+def test_reader_qos_follows_what_subscribers_ask_for_else_adapts():
+    best_effort = QosProfile(reliable=False)
+    latched = QosProfile(transient_local=True, depth=1)
+    asked = reader_profile([DEFAULT], [{"reliability": "best_effort", "depth": 100}])
+    assert asked == QosProfile(False, False, 100)
+    assert reader_profile([best_effort], [{"reliability": "reliable"}]).reliable is True
+    assert (
+        reader_profile(
+            [DEFAULT], [{"reliability": "reliable"}, {"reliability": "best_effort"}]
+        ).reliable
+        is False
+    )
+    assert reader_profile([DEFAULT], [{"durability": "transient_local"}]).transient_local is True
+    assert reader_profile([latched], [{"durability": "volatile"}]).transient_local is False
+    adaptive = reader_profile([best_effort, latched], [{"reliability": "best_available"}])
+    assert adaptive == reader_profile([best_effort, latched])
+    with pytest.raises(QosError, match=r"qos\.reliability"):
+        reader_profile([], [{"reliability": "sometimes"}])
 
 
 def test_request_header_sits_between_encapsulation_and_fields(registry):
@@ -214,3 +235,28 @@ def test_outbox_keeps_order_and_drops_the_oldest_of_a_full_stream():
     assert outbox.dropped == {"imu": 2, "scan": 2}
     outbox.close()
     assert outbox.get(timeout_s=0) is None
+
+
+def test_discovery_info_layouts_per_distribution(registry):
+    """Jazzy's bytes are rosbags' own CDR of the message; Humble's GIDs take 24 bytes."""
+    node = NodeEntities("/ns/talker", frozenset({bytes(range(16))}), frozenset())
+    info = ParticipantInfo(bytes(range(100, 116)), (node,))
+    jazzy = discovery_info.encode(info, "jazzy")
+    canonical = {
+        "gid": {"data": info.participant},
+        "node_entities_info_seq": [
+            {
+                "node_namespace": "/ns",
+                "node_name": "talker",
+                "reader_gid_seq": [{"data": bytes(range(16))}],
+                "writer_gid_seq": [],
+            }
+        ],
+    }
+    assert jazzy == to_cdr(registry, "rmw_dds_common/msg/ParticipantEntitiesInfo", canonical)
+    humble = discovery_info.encode(info, "humble")
+    assert len(humble) == len(jazzy) + 8 + 8  # the participant's and the reader's GID
+    assert discovery_info.decode(humble, "humble") == info
+    assert discovery_info.decode(jazzy, "kilted") == info
+    with pytest.raises(ValueError):
+        discovery_info.decode(jazzy, "humble")

@@ -291,3 +291,12 @@ def test_payload_bytes_counts_arrays_and_bytes_not_structure_or_text():
         "markers": [{"blob": b"y" * 5}],
     }
     assert payload_bytes(msg) == 1000 + 160 + 5
+
+
+def test_ros1_header_seq_is_dropped_and_only_there(registry):
+    msg = norm(registry, "std_msgs/msg/Header", {"seq": 4, "frame_id": "map"})
+    assert msg == {"stamp": ns_to_stamp(NOW_NS), "frame_id": "map"}
+    with pytest.raises(MessageValidationError, match="'seq': no such field"):
+        norm(registry, "builtin_interfaces/msg/Duration", {"seq": 4})
+    with pytest.raises(MessageValidationError, match=r"'header\.sequence': no such field"):
+        norm(registry, "geometry_msgs/msg/PointStamped", {"header": {"sequence": 1}})

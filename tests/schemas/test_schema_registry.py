@@ -101,7 +101,29 @@ def test_action_parts(registry):
     assert fib.goal.fields[0].name == "order"
     assert fib.result.fields[0].dtype == np.int32
     assert fib.feedback.fields[0].array == "sequence"
-    assert registry.action_names() == ["example_interfaces/action/Fibonacci"]
+    assert registry.action_names() == [
+        "example_interfaces/action/Fibonacci",
+        "test_msgs/action/Fibonacci",
+    ]
+
+
+def test_actions_have_rcl_actions_wire_types(registry):
+    """rosidl's `<T>_SendGoal`/`_GetResult` services and `_FeedbackMessage`, as on DDS."""
+    send_goal = registry.service("test_msgs/action/Fibonacci_SendGoal")
+    assert [(f.name, f.base) for f in send_goal.request.fields] == [
+        ("goal_id", "unique_identifier_msgs/msg/UUID"),
+        ("goal", "test_msgs/action/Fibonacci_Goal"),
+    ]
+    assert [f.name for f in send_goal.response.fields] == ["accepted", "stamp"]
+    result = registry.service("test_msgs/action/Fibonacci_GetResult").response
+    assert [(f.name, f.base) for f in result.fields] == [
+        ("status", "int8"),
+        ("result", "test_msgs/action/Fibonacci_Result"),
+    ]
+    feedback = registry.message("test_msgs/action/Fibonacci_FeedbackMessage")
+    assert [f.name for f in feedback.fields] == ["goal_id", "feedback"]
+    cancel = registry.service("action_msgs/srv/CancelGoal")
+    assert [f.name for f in cancel.response.fields] == ["return_code", "goals_canceling"]
 
 
 def test_both_spellings_give_the_same_spec(registry):
