@@ -113,6 +113,7 @@ class Context:
                     Delivery(message, subscription.spelling, encoding),
                     subscription.topic,
                     fragment_size,
+                    subscription.settings.queue_length,
                 )
             )
         if release.wake_at_ns is not None:

@@ -19,6 +19,7 @@ from typing import Any, Protocol
 from bridge.config import BridgeConfig
 from bridge.core import BridgeCore
 from bridge.effects import Effect, Send
+from bridge.goodput import LinkHealth
 from bridge.graph import ActionEntry, ServiceEntry, TopicEntry
 from bridge.http import HttpRoutes
 from bridge.link import Delivered
@@ -53,6 +54,8 @@ class Edge(Protocol):
     def apply(self, effects: list[Effect]) -> None: ...
 
     def send_queue_drops(self, client_id: int) -> Mapping[str, int]: ...
+
+    def link_health(self, client_id: int) -> LinkHealth | None: ...
 
 
 class GraphView(Protocol):
@@ -106,6 +109,11 @@ class PluginHost:
     def send_queue_drops(self, client_id: int) -> Mapping[str, int]:
         """Messages per topic a websocket client's send queue dropped (empty if none)."""
         return self._edge.send_queue_drops(client_id)
+
+    def link_health(self, client_id: int) -> LinkHealth | None:
+        """A websocket client's goodput, round trip and conflated messages (None if it is
+        gone or in-process)."""
+        return self._edge.link_health(client_id)
 
     @staticmethod
     def now_ns() -> int:

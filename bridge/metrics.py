@@ -23,6 +23,7 @@ from prometheus_client import (
 )
 from prometheus_client.core import CounterMetricFamily, GaugeMetricFamily, Metric
 
+from bridge.goodput import LinkHealth
 from bridge.tracing import TopicTraffic
 
 # Text exposition format 0.0.4, which generate_latest writes and every scraper reads.
@@ -41,6 +42,8 @@ class MetricsSnapshot:
     spans_discarded: int = 0
     # Restarts per component as `riverbridge up` reports them (schemas.supervision).
     restarts: Mapping[str, int] = field(default_factory=dict)
+    # Each websocket client's link (goodput, round trip, conflation), by subscriber name.
+    links: Mapping[str, LinkHealth] = field(default_factory=dict)
 
 
 def safe_label(value: str) -> str:
@@ -91,6 +94,7 @@ class SnapshotCollector:
         for (topic, subscriber), count in sorted(snapshot.drops.items()):
             dropped.add_metric([safe_label(topic), safe_label(subscriber)], count)
         yield from (messages, wire, payload, dropped)
+        yield from link_metrics(snapshot.links)
         yield GaugeMetricFamily(
             "riverbridge_clients", "Connected websocket clients.", value=snapshot.clients
         )
@@ -118,6 +122,40 @@ class SnapshotCollector:
             for component, count in sorted(snapshot.restarts.items()):
                 restarts.add_metric([safe_label(component)], count)
             yield restarts
+
+
+def link_metrics(links: Mapping[str, LinkHealth]) -> Iterator[Metric]:
+    """Per client: goodput, round trip, unsent bytes; per topic and client: conflated."""
+    conflated = CounterMetricFamily(
+        "riverbridge_conflated",
+        "Messages a subscription's queue_length replaced by newer ones while its client "
+        "could not take more, per topic and subscriber.",
+        labels=["topic", "subscriber"],
+    )
+    goodput = GaugeMetricFamily(
+        "riverbridge_client_goodput_bytes_per_second",
+        "A client's link goodput, measured while its socket was backed up.",
+        labels=["subscriber"],
+    )
+    rtt = GaugeMetricFamily(
+        "riverbridge_client_rtt_seconds",
+        "Round trip of the client's last websocket keepalive ping.",
+        labels=["subscriber"],
+    )
+    unsent = GaugeMetricFamily(
+        "riverbridge_client_unsent_bytes",
+        "Bytes handed to a client's socket and not yet sent.",
+        labels=["subscriber"],
+    )
+    for subscriber, health in sorted(links.items()):
+        label = safe_label(subscriber)
+        for topic, count in sorted(health.conflated.items()):
+            conflated.add_metric([safe_label(topic), label], count)
+        if health.goodput_bytes_per_s is not None:
+            goodput.add_metric([label], health.goodput_bytes_per_s)
+        rtt.add_metric([label], health.rtt_s)
+        unsent.add_metric([label], health.unsent_bytes)
+    yield from (conflated, goodput, rtt, unsent)
 
 
 def render_metrics(snapshot: MetricsSnapshot) -> str:

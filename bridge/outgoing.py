@@ -16,7 +16,13 @@ from typing import Any
 from schemas import codec_json
 from schemas.codec_cdr import to_cdr
 from schemas.codec_png import encode_png_op
-from schemas.frames import fragments_json, publish_cbor, publish_cbor_raw, publish_json
+from schemas.frames import (
+    fragments_cbor,
+    fragments_json,
+    publish_cbor,
+    publish_cbor_raw,
+    publish_json,
+)
 from schemas.message import payload_bytes
 from schemas.registry import TypeRegistry
 
@@ -162,16 +168,21 @@ Outgoing = Delivery | ControlMessage
 
 
 def render(item: Outgoing, fragment_size: int | None, fallback_id: str) -> list[WireFrame]:
-    """The frames that carry `item`, split into `fragment` ops when text exceeds the size.
+    """The frames that carry `item`, split into `fragment` ops when longer than the size.
 
-    `fragment_size` counts characters of the JSON text (ASCII, so bytes); binary frames are
-    never fragmented (protocol §2.10). Fragments carry the message's own id, else
+    `fragment_size` counts characters of the JSON text (ASCII, so bytes), or bytes of a CBOR
+    frame: rosbridge never fragments binary frames (protocol §2.10), riverbridge does when a
+    CBOR subscriber asks for it, into binary `fragment` ops whose `data` is a byte string
+    (docs/bridge.md, "Over a thin link"). Fragments carry the message's own id, else
     `fallback_id`, and an integer `total`.
     """
     frame = item.frame()
-    if fragment_size is None or not frame.text or len(frame.data) <= fragment_size:
+    if fragment_size is None or len(frame.data) <= fragment_size:
         return [frame]
     message_id = item.message_id
     fragment_id = fallback_id if message_id is None else message_id
+    if not frame.text:
+        pieces = fragments_cbor(frame.data, fragment_size, fragment_id)
+        return [WireFrame(piece, text=False) for piece in pieces]
     pieces = fragments_json(frame.data.decode("ascii"), fragment_size, fragment_id)
     return [WireFrame(piece, text=True) for piece in pieces]

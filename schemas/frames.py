@@ -1,6 +1,6 @@
 """The frames of the ops sent per message: ``publish`` and ``fragment``, without a model.
 
-These two ops go out once per message (a scan cut at 1000 characters is thousands of
+These ops go out once per message (a scan cut at 1000 characters is thousands of
 fragments), so they are written by typed functions instead of building their
 `schemas.ops.Publish` / `schemas.ops.Fragment` model each time (~6 µs a model, more than
 encoding an Imu frame); tests/schemas/test_schema_frames.py reads every frame back through
@@ -50,6 +50,27 @@ def fragments_json(text: str, fragment_size: int, fragment_id: OpId) -> list[byt
                 "op": "fragment",
                 "id": fragment_id,
                 "data": text[num * fragment_size : (num + 1) * fragment_size],
+                "num": num,
+                "total": total,
+            }
+        )
+        for num in range(total)
+    ]
+
+
+def fragments_cbor(data: bytes, fragment_size: int, fragment_id: OpId) -> list[bytes]:
+    """Binary frames ``{"op":"fragment","id","data","num","total"}`` carrying the CBOR frame
+    `data` in slices of `fragment_size` bytes, ``data`` a byte string (docs/bridge.md, "Over a
+    thin link": rosbridge never fragments binary frames, and only clients that join byte
+    slices, such as riverbridge's own, can read these; they are sent only on request)."""
+    total = -(-len(data) // fragment_size)
+    view = memoryview(data)
+    return [
+        codec_cbor.dumps(
+            {
+                "op": "fragment",
+                "id": fragment_id,
+                "data": bytes(view[num * fragment_size : (num + 1) * fragment_size]),
                 "num": num,
                 "total": total,
             }
