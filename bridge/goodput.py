@@ -60,10 +60,11 @@ class LinkHealth:
     """How one client's link is doing, for `/metrics` and the dashboard: its measured goodput
     (None until measured), the round trip of the websocket's last keepalive ping (0 before the
     first), the bytes handed on but not yet sent, the room it is given, and the messages per
-    topic its `queue_length` conflated."""
+    topic its `queue_length` conflated and its `reduce` thinned."""
 
     goodput_bytes_per_s: float | None
     rtt_s: float
     unsent_bytes: int
     room_bytes: int
     conflated: Mapping[str, int] = field(default_factory=dict)
+    reduced: Mapping[str, int] = field(default_factory=dict)

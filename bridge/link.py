@@ -38,6 +38,7 @@ import fcntl
 import logging
 import struct
 import time
+from collections import Counter
 from collections.abc import Callable
 from concurrent.futures import Executor
 
@@ -112,6 +113,7 @@ class ClientLink:
         self.max_room_bytes = self.room_bytes = min(WRITE_HIGH_WATER, limit_bytes // 4)
         self.pause_bytes = limit_bytes // 16
         self.goodput = GoodputMeter()
+        self.reduced: Counter[str] = Counter()  # point clouds thinned, per topic
         self.frames_sent = 0
         self.closed = False  # the client has left
         self.closing = False  # the bridge is closing the connection
@@ -172,7 +174,7 @@ class ClientLink:
         item = send.item
         if item.size_hint < self._offload_bytes or not isinstance(item, Delivery):
             return False
-        return item.encoding != CBOR
+        return item.encoding != CBOR or item.reduce is not None  # numpy's sort leaves the GIL
 
     def _enqueue(self, send: Send, frames: list[WireFrame] | None = None) -> None:
         if frames is None and not self._needs_worker(send):
@@ -247,10 +249,21 @@ class ClientLink:
     def _render(self, send: Send) -> list[WireFrame] | None:
         """The frames of `send`, or None (logged) if it cannot be encoded."""
         try:
-            return render(send.item, send.fragment_size, self._next_fragment_id())
+            frames = render(
+                send.item, send.fragment_size, self._next_fragment_id(), self._link_rate()
+            )
         except Exception as exc:  # one unencodable message must not cost the client anything else
             self._encode_failed(send, exc)
             return None
+        self._note_reduction(send, frames)
+        return frames
+
+    def _link_rate(self) -> float | None:
+        return self.goodput.rate_bytes_per_s
+
+    def _note_reduction(self, send: Send, frames: list[WireFrame]) -> None:
+        if frames and frames[0].reduction is not None and send.drop_key is not None:
+            self.reduced[send.drop_key] += 1
 
     def _start_render(self, waiting: Waiting) -> None:
         key = waiting.send.drop_key
@@ -262,6 +275,7 @@ class ClientLink:
                 waiting.send.item,
                 waiting.send.fragment_size,
                 self._next_fragment_id(),
+                self._link_rate(),
             )
         except RuntimeError:  # the pool has shut down: the server is stopping
             return
@@ -276,6 +290,7 @@ class ClientLink:
                 self._encode_failed(waiting.send, exc)
                 return
             frames = done.result()
+            self._note_reduction(waiting.send, frames)
             waiting.frames = frames
             waiting.nbytes = sum(len(f.data) for f in frames)
             self.queue.push_front(waiting)
@@ -436,6 +451,7 @@ class ClientLink:
             self._outside_bytes(),
             self.room_bytes,
             dict(self.queue.conflated),
+            dict(self.reduced),
         )
 
     def backlog_bytes(self) -> int:

@@ -125,11 +125,17 @@ class SnapshotCollector:
 
 
 def link_metrics(links: Mapping[str, LinkHealth]) -> Iterator[Metric]:
-    """Per client: goodput, round trip, unsent bytes; per topic and client: conflated."""
+    """Per client: goodput, round trip, unsent bytes; per topic and client: conflated and
+    reduced messages."""
     conflated = CounterMetricFamily(
         "riverbridge_conflated",
         "Messages a subscription's queue_length replaced by newer ones while its client "
         "could not take more, per topic and subscriber.",
+        labels=["topic", "subscriber"],
+    )
+    reduced = CounterMetricFamily(
+        "riverbridge_reduced",
+        "Point clouds thinned to fit a subscriber's link (reduce), per topic and subscriber.",
         labels=["topic", "subscriber"],
     )
     goodput = GaugeMetricFamily(
@@ -151,11 +157,13 @@ def link_metrics(links: Mapping[str, LinkHealth]) -> Iterator[Metric]:
         label = safe_label(subscriber)
         for topic, count in sorted(health.conflated.items()):
             conflated.add_metric([safe_label(topic), label], count)
+        for topic, count in sorted(health.reduced.items()):
+            reduced.add_metric([safe_label(topic), label], count)
         if health.goodput_bytes_per_s is not None:
             goodput.add_metric([label], health.goodput_bytes_per_s)
         rtt.add_metric([label], health.rtt_s)
         unsent.add_metric([label], health.unsent_bytes)
-    yield from (conflated, goodput, rtt, unsent)
+    yield from (conflated, reduced, goodput, rtt, unsent)
 
 
 def render_metrics(snapshot: MetricsSnapshot) -> str:

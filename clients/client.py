@@ -281,6 +281,7 @@ class RosbridgeClient:
         maxsize: int = DEFAULT_MAXSIZE,
         bytes_as_numpy: bool = False,
         fragment_size: int | None = None,
+        reduce: Mapping[str, Any] | None = None,
     ) -> Subscription:
         """Subscribe to ``topic``; returns an async iterator of :class:`clients.Received`.
 
@@ -294,6 +295,8 @@ class RosbridgeClient:
         bytes_as_numpy : deliver ``bytes`` fields as read-only uint8 ndarray views.
         fragment_size : the bridge cuts larger messages into fragments this long, sent with
             other topics' messages between them (docs/bridge.md, "Over a thin link").
+        reduce : a PointCloud2 thinned by the bridge: ``{"voxel_size": m}``,
+            ``{"point_budget": n}`` or ``{"point_budget": "auto"}`` (what the link carries).
 
         Works before the topic has a publisher, before ``connect()`` and while reconnecting
         (the subscription is then sent when the connection opens).
@@ -305,6 +308,7 @@ class RosbridgeClient:
             queue_length=queue_length,
             compression=compression,
             fragment_size=fragment_size,
+            reduce=reduce,
         )
         sub = Subscription(
             topic=topic,

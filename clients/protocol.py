@@ -66,6 +66,7 @@ class SubscriptionRecord:
     queue_length: int
     compression: Compression
     fragment_size: int | None = None
+    reduce: Mapping[str, Any] | None = None
 
 
 @dataclass(frozen=True, slots=True)
@@ -175,6 +176,7 @@ class ClientProtocol:
         queue_length: int = 0,
         compression: Compression | None = None,
         fragment_size: int | None = None,
+        reduce: Mapping[str, Any] | None = None,
     ) -> tuple[str, Frame]:
         """Register a subscription; return its id and the ``subscribe`` frame.
 
@@ -192,6 +194,7 @@ class ClientProtocol:
             int(queue_length),
             compression or self.default_compression(),
             fragment_size,
+            reduce,
         )
         frame = _subscribe_frame(record)
         self._subs[sub_id] = record
@@ -503,12 +506,15 @@ class _SubscribeType(TypedDict, total=False):
 
     type: str
     fragment_size: int
+    reduce: dict[str, Any]
 
 
 def _subscribe_frame(record: SubscriptionRecord) -> Frame:
     typed: _SubscribeType = {} if record.type is None else {"type": record.type}
     if record.fragment_size is not None:
         typed["fragment_size"] = record.fragment_size
+    if record.reduce is not None:
+        typed["reduce"] = dict(record.reduce)
     return op_frame(
         ops.Subscribe,
         id=record.sub_id,

@@ -16,13 +16,18 @@ from schemas.values import Message, OpId
 _NS_PER_S = 1_000_000_000
 
 
-def publish_json(topic: str, msg: Message) -> bytes:
-    """Text frame ``{"op":"publish","topic":T,"msg":M}`` (ASCII JSON, bytes as base64)."""
+def publish_json(topic: str, msg: Message, reduced: Message | None = None) -> bytes:
+    """Text frame ``{"op":"publish","topic":T,"msg":M}`` (ASCII JSON, bytes as base64), with
+    ``"reduced":R`` after ``msg`` when the bridge thinned the message (docs/bridge.md)."""
+    if reduced is not None:
+        return codec_json.dumps({"op": "publish", "topic": topic, "msg": msg, "reduced": reduced})
     return codec_json.dumps({"op": "publish", "topic": topic, "msg": msg})
 
 
-def publish_cbor(topic: str, msg: Message) -> bytes:
+def publish_cbor(topic: str, msg: Message, reduced: Message | None = None) -> bytes:
     """Binary frame of the same map in CBOR, numeric sequences as typed-array tags."""
+    if reduced is not None:
+        return codec_cbor.dumps({"op": "publish", "topic": topic, "msg": msg, "reduced": reduced})
     return codec_cbor.dumps({"op": "publish", "topic": topic, "msg": msg})
 
 

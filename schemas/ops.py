@@ -138,6 +138,8 @@ class Subscribe(OpBase):
     fragment_size: StrictInt | None = None
     compression: StrictStr = "none"
     qos: JsonObject | None = None
+    # riverbridge: thin a PointCloud2 to fit the link (docs/bridge.md, "Over a thin link")
+    reduce: JsonObject | None = None
 
 
 class Unsubscribe(OpBase):
