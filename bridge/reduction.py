@@ -26,9 +26,9 @@ from schemas.pointcloud import PointCloudLayoutError, view_points
 POINTCLOUD2 = frozenset({"sensor_msgs/msg/PointCloud2", "sensor_msgs/PointCloud2"})
 # Voxel sizes a budget chooses from: 5 cm to 3.2 m in steps of sqrt(2).
 VOXEL_LADDER_M = tuple(round(0.05 * 2 ** (k / 2), 3) for k in range(13))
-# "auto": a scan may take this long to cross the client's link (a 2 Hz LIDAR then leaves half
-# of the link to everything else)
-AUTO_SHARE_S = 0.25
+# "auto": a scan may take this long to cross the client's link (a 2 Hz LIDAR then leaves 60 %
+# of the link to everything else, and a scan is at most ~0.2 s old when its last byte leaves)
+AUTO_SHARE_S = 0.2
 
 
 @dataclass(frozen=True, slots=True)

@@ -64,8 +64,8 @@ def test_a_budget_takes_the_smallest_ladder_voxel_that_fits():
     assert reducer.voxel_for(ReduceRequest(point_budget="auto"), None) is None
 
 
-def test_auto_budgets_a_quarter_second_of_the_link():
-    assert budget_for_link(1_250_000, 16) == 19_531  # 10 Mbit/s, x y z intensity
+def test_auto_budgets_a_fifth_of_a_second_of_the_link():
+    assert budget_for_link(1_250_000, 16) == 15_625  # 10 Mbit/s, x y z intensity
     assert budget_for_link(None, 16) is None
 
 
