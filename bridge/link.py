@@ -70,6 +70,7 @@ POLL_S = 0.01  # how often a paused reader looks at a link's progress
 # waits this long plus one fragment (docs/bridge.md, "Over a thin link").
 ROOM_HORIZON_S = 0.02
 MIN_ROOM_BYTES = 16 * 1024  # never less: a link of 6 Mbit/s or less still gets whole frames
+SLACK_BYTES = 4 * 1024  # a frame larger than the room goes once no more than this is unsent
 SIOCOUTQNSD = 0x894B  # Linux: bytes in a TCP socket's send queue not yet sent
 UNSENT_FRESH_S = 0.001  # the kernel's figure is read at most once a millisecond per link
 PACE_MIN_S, PACE_MAX_S = 0.001, 0.02  # when the kernel holds the surplus, look again within
@@ -220,12 +221,13 @@ class ClientLink:
 
     def _fits(self, nbytes: int) -> bool:
         """May a frame of `nbytes` go now? On a link measured thin (room below the maximum)
-        only if it fits in the room or the socket has sent everything: a fragment then waits
-        for the one before it, and a small message behind it waits for one fragment at most."""
+        only if it fits in the room or the socket has sent nearly everything (`SLACK_BYTES`:
+        a trickle of small messages must not starve a large one): a fragment then waits for
+        the one before it, and a small message behind it waits for one fragment at most."""
         if self.room_bytes >= self.max_room_bytes:
             return True
         outside = self._outside_bytes()
-        return outside == 0 or outside + nbytes <= self.room_bytes
+        return outside <= SLACK_BYTES or outside + nbytes <= self.room_bytes
 
     def _wait_for_room(self) -> None:
         """Look again when the link will have drained: the transport says when its own buffer
