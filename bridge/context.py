@@ -110,15 +110,17 @@ class Context:
 
     def release(self, session: ClientSession, subscription: Subscription, release: Release) -> None:
         """Turn a subscription's release into deliveries and a wake-up deadline."""
-        encoding = subscription.settings.compression
+        settings = subscription.settings
+        encoding = settings.compression
         fragment_size = session.fragment_size_for(subscription)
         for message in release.messages:
             self.effects.append(
                 Send(
                     session.client_id,
-                    Delivery(message, subscription.spelling, encoding),
+                    Delivery(message, subscription.spelling, encoding, settings.reduce),
                     subscription.topic,
                     fragment_size,
+                    settings.queue_length,
                 )
             )
         if release.wake_at_ns is not None:

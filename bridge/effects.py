@@ -21,13 +21,16 @@ class Send:
     `drop_key` names the stream the item belongs to (the topic for `publish` deliveries): when
     the client's send queue is full the oldest item with a drop key is discarded. `None` means
     the item must never be dropped (service responses, action results, forwarded requests).
-    Text frames longer than `fragment_size` characters go out as `fragment` ops.
+    Frames longer than `fragment_size` go out as `fragment` ops. `keep` is the subscription's
+    `queue_length`: while the client cannot take more, only the newest `keep` messages of the
+    topic wait (0: all of them, within the client's send buffer).
     """
 
     client_id: int
     item: Outgoing
     drop_key: str | None = None
     fragment_size: int | None = None
+    keep: int = 0
 
 
 @dataclass(frozen=True, slots=True)

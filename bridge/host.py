@@ -19,6 +19,7 @@ from typing import Any, Protocol
 from bridge.config import BridgeConfig
 from bridge.core import BridgeCore
 from bridge.effects import Effect, Send
+from bridge.goodput import LinkHealth
 from bridge.graph import ActionEntry, ServiceEntry, TopicEntry
 from bridge.http import HttpRoutes
 from bridge.link import Delivered
@@ -72,6 +73,8 @@ class Edge(Protocol):
     def apply(self, effects: list[Effect]) -> None: ...
 
     def send_queue_drops(self, client_id: int) -> Mapping[str, int]: ...
+
+    def link_health(self, client_id: int) -> LinkHealth | None: ...
 
 
 class GraphView(Protocol):
@@ -134,6 +137,11 @@ class PluginHost:
     def answered_services(self) -> Mapping[str, str]:
         """Services the bridge answers itself (rosapi, stats): name -> type."""
         return {name: service.type_name for name, service in self._core.state.rosapi.items()}
+
+    def link_health(self, client_id: int) -> LinkHealth | None:
+        """A websocket client's goodput, round trip and conflated messages (None if it is
+        gone or in-process)."""
+        return self._edge.link_health(client_id)
 
     @staticmethod
     def now_ns() -> int:

@@ -3,9 +3,17 @@
 A message for a client whose socket has room and nothing waiting is framed and handed to the
 transport at once, in the same loop turn that produced it: no queue, no task switch. Frames
 written in one turn leave in one `transport.write` when the turn ends (one system call for a
-burst instead of one per message). Only when the socket is backed up (the transport holds more
-than `room_bytes`, 1 MiB by default) do messages wait in the client's `SendQueue`, bounded in bytes;
-past the bound each topic loses its oldest waiting message, counted (`bridge.sendqueue`).
+burst instead of one per message). Only when the socket is backed up do messages wait in the
+client's `SendQueue`, bounded in bytes; past the bound each topic loses its oldest waiting
+message, and a subscription with `queue_length` keeps only its newest, counted
+(`bridge.sendqueue`).
+
+Room is what the link drains soon: the bytes not yet sent (the transport's and the kernel's
+unsent bytes, `SIOCOUTQNSD`) may be at most `ROOM_HORIZON_S` of the client's measured goodput
+(`bridge.goodput`), between `MIN_ROOM_BYTES` and 1 MiB (1 MiB until measured: a client on
+loopback never sees less). So on a thin link a scan is not handed to the socket whole: its
+fragments go one at a time, and an IMU sample waits for at most one fragment. While the kernel
+holds the surplus a timer, not the transport, says when to look again.
 
 Large messages whose encode is not just C code holding the GIL are encoded on a worker thread
 (JSON with base64, PNG, CDR); their topic waits for the encode (order per topic), other topics
@@ -26,8 +34,11 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import fcntl
 import logging
+import struct
 import time
+from collections import Counter
 from collections.abc import Callable
 from concurrent.futures import Executor
 
@@ -35,6 +46,7 @@ from websockets.asyncio.server import ServerConnection
 from websockets.protocol import State
 
 from bridge.effects import Send
+from bridge.goodput import GoodputMeter, LinkHealth
 from bridge.outgoing import CBOR, CBOR_RAW, Delivery, WireFrame, render
 from bridge.problems import NS_PER_S, ProblemLog
 from bridge.reply_budget import ReplyBudget
@@ -54,6 +66,14 @@ STALL_S = 0.2
 # A link backed up for longer than this is a slow reader: it drops rather than pace publishers.
 SLOW_S = 2.0
 POLL_S = 0.01  # how often a paused reader looks at a link's progress
+# Unsent bytes a socket may hold, in seconds of its client's goodput: an IMU sample written now
+# waits this long plus one fragment (docs/bridge.md, "Over a thin link").
+ROOM_HORIZON_S = 0.02
+MIN_ROOM_BYTES = 16 * 1024  # never less: a link of 6 Mbit/s or less still gets whole frames
+SLACK_BYTES = 4 * 1024  # a frame larger than the room goes once no more than this is unsent
+SIOCOUTQNSD = 0x894B  # Linux: bytes in a TCP socket's send queue not yet sent
+UNSENT_FRESH_S = 0.001  # the kernel's figure is read at most once a millisecond per link
+PACE_MIN_S, PACE_MAX_S = 0.001, 0.02  # when the kernel holds the surplus, look again within
 
 Delivered = Callable[[int, Delivery, int, int], None]  # client, delivery, wire bytes, ns
 
@@ -91,8 +111,10 @@ class ClientLink:
         self._over_budget = over_budget
         # What the transport may hold before messages queue (a quarter of a small bound), and
         # the queue from which publishers feeding this link wait for it (1 MiB by default).
-        self.room_bytes = min(WRITE_HIGH_WATER, limit_bytes // 4)
+        self.max_room_bytes = self.room_bytes = min(WRITE_HIGH_WATER, limit_bytes // 4)
         self.pause_bytes = limit_bytes // 16
+        self.goodput = GoodputMeter()
+        self.reduced: Counter[str] = Counter()  # point clouds thinned, per topic
         self.frames_sent = 0
         self.closed = False  # the client has left
         self.closing = False  # the bridge is closing the connection
@@ -102,6 +124,11 @@ class ClientLink:
         self._delivered = delivered
         self._transport = ws.transport
         self._transport.set_write_buffer_limits(high=self.room_bytes)  # drain() wakes at 1/4
+        sock = self._transport.get_extra_info("socket")
+        self._fd: int | None = sock.fileno() if sock is not None else None
+        self._kernel_unsent = 0
+        self._unsent_read_at = float("-inf")
+        self._pace_timer: asyncio.TimerHandle | None = None
         self._protocol = ws.protocol
         self._busy: set[str | None] = set()  # streams with a message being encoded
         self._fragment_seq = 0  # numbers fragment ids of messages that have no id of their own
@@ -129,10 +156,14 @@ class ClientLink:
             and not self._needs_worker(send)
         ):
             frames = self._render(send)
-            if frames is not None:
+            if frames is None:
+                return False
+            if len(frames) == 1:
                 self._write(send, frames)
-            return False
-        self._enqueue(send)
+                return False
+            self._enqueue(send, frames)  # fragments leave one at a time, others between them
+        else:
+            self._enqueue(send)
         self._service()
         return self.wants_pause()
 
@@ -144,17 +175,14 @@ class ClientLink:
         item = send.item
         if item.size_hint < self._offload_bytes or not isinstance(item, Delivery):
             return False
-        return item.encoding != CBOR
+        return item.encoding != CBOR or item.reduce is not None  # numpy's sort leaves the GIL
 
-    def _enqueue(self, send: Send) -> None:
-        frames = None
-        if not self._needs_worker(send):
+    def _enqueue(self, send: Send, frames: list[WireFrame] | None = None) -> None:
+        if frames is None and not self._needs_worker(send):
             frames = self._render(send)  # small: exact size now; the encode is shared anyway
             if frames is None:
                 return
-            nbytes = sum(len(f.data) for f in frames)
-        else:
-            nbytes = estimated_size(send)
+        nbytes = estimated_size(send) if frames is None else sum(len(f.data) for f in frames)
         if send.drop_key is None and not self.replies.charge(nbytes) and not self.over_budget:
             self.over_budget = True
             self._over_budget(self.replies.reason())  # the edge closes the client
@@ -165,28 +193,79 @@ class ClientLink:
             )
 
     def _service(self) -> None:
-        """Write waiting messages while the socket has room."""
+        """Write waiting messages while the socket has room, a fragment at a time."""
+        blocked = False
         while self._has_room():
             waiting = self.queue.pop(self._busy)
             if waiting is None:
                 break
-            if waiting.frames is None:
+            frames = waiting.frames
+            if frames is None:
                 self._start_render(waiting)
                 continue
-            if waiting.send.drop_key is None:
+            piece = frames[waiting.first]
+            if not self._fits(len(piece.data)):
+                self.queue.push_front(waiting)
+                blocked = True
+                break
+            if waiting.send.drop_key is None and not waiting.started:
                 self.replies.credit(waiting.nbytes)  # answers are rendered when queued
-            self._write(waiting.send, waiting.frames)
-        if len(self.queue) and not self._corked and not self._has_room():
-            self._await_drain()
+            if waiting.first == len(frames) - 1:
+                self._write(waiting.send, [piece], waiting.sent_bytes)
+            else:
+                self._write(waiting.send, [piece], final=False)
+                self.queue.requeue(waiting, len(piece.data))
+        if len(self.queue) and not self._corked and (blocked or not self._has_room()):
+            self._wait_for_room()
         self._note_progress()
+
+    def _fits(self, nbytes: int) -> bool:
+        """May a frame of `nbytes` go now? On a link measured thin (room below the maximum)
+        only if it fits in the room or the socket has sent nearly everything (`SLACK_BYTES`:
+        a trickle of small messages must not starve a large one): a fragment then waits for
+        the one before it, and a small message behind it waits for one fragment at most."""
+        if self.room_bytes >= self.max_room_bytes:
+            return True
+        outside = self._outside_bytes()
+        return outside <= SLACK_BYTES or outside + nbytes <= self.room_bytes
+
+    def _wait_for_room(self) -> None:
+        """Look again when the link will have drained: the transport says when its own buffer
+        is low; bytes the kernel holds, only a timer sized by the goodput can tell."""
+        if self._transport.get_write_buffer_size() > self.max_room_bytes // 4:
+            self._await_drain()
+            return
+        if self._pace_timer is not None or self.closed:
+            return
+        rate = self.goodput.rate_bytes_per_s
+        delay_s = PACE_MAX_S / 4 if not rate else self._outside_bytes() / rate / 2
+        self._pace_timer = self._loop.call_later(
+            min(PACE_MAX_S, max(PACE_MIN_S, delay_s)), self._paced
+        )
+
+    def _paced(self) -> None:
+        self._pace_timer = None
+        if not self.closed:
+            self._service()
 
     def _render(self, send: Send) -> list[WireFrame] | None:
         """The frames of `send`, or None (logged) if it cannot be encoded."""
         try:
-            return render(send.item, send.fragment_size, self._next_fragment_id())
+            frames = render(
+                send.item, send.fragment_size, self._next_fragment_id(), self._link_rate()
+            )
         except Exception as exc:  # one unencodable message must not cost the client anything else
             self._encode_failed(send, exc)
             return None
+        self._note_reduction(send, frames)
+        return frames
+
+    def _link_rate(self) -> float | None:
+        return self.goodput.rate_bytes_per_s
+
+    def _note_reduction(self, send: Send, frames: list[WireFrame]) -> None:
+        if frames and frames[0].reduction is not None and send.drop_key is not None:
+            self.reduced[send.drop_key] += 1
 
     def _start_render(self, waiting: Waiting) -> None:
         key = waiting.send.drop_key
@@ -198,6 +277,7 @@ class ClientLink:
                 waiting.send.item,
                 waiting.send.fragment_size,
                 self._next_fragment_id(),
+                self._link_rate(),
             )
         except RuntimeError:  # the pool has shut down: the server is stopping
             return
@@ -212,6 +292,7 @@ class ClientLink:
                 self._encode_failed(waiting.send, exc)
                 return
             frames = done.result()
+            self._note_reduction(waiting.send, frames)
             waiting.frames = frames
             waiting.nbytes = sum(len(f.data) for f in frames)
             self.queue.push_front(waiting)
@@ -249,8 +330,12 @@ class ClientLink:
         self._fragment_seq += 1
         return f"fragment:{self._fragment_seq}"
 
-    def _write(self, send: Send, frames: list[WireFrame]) -> None:
-        """Frame `frames` into the websocket; the bytes leave when this loop turn ends."""
+    def _write(
+        self, send: Send, frames: list[WireFrame], prior_bytes: int = 0, final: bool = True
+    ) -> None:
+        """Frame `frames` into the websocket; the bytes leave when this loop turn ends. A
+        delivery counts once its `final` frames are written, with the `prior_bytes` of its
+        earlier fragments."""
         protocol = self._protocol
         if protocol.state is not State.OPEN:
             return
@@ -263,8 +348,8 @@ class ClientLink:
             nbytes += len(frame.data)
         self._corked += nbytes
         self.frames_sent += len(frames)
-        if isinstance(send.item, Delivery):
-            self._just_delivered.append((send.item, nbytes))
+        if final and isinstance(send.item, Delivery):
+            self._just_delivered.append((send.item, prior_bytes + nbytes))
         if not self._flush_pending:
             self._flush_pending = True
             self._loop.call_soon(self._flush)
@@ -276,6 +361,7 @@ class ClientLink:
         chunks = self._protocol.data_to_send()
         if self._protocol.state is State.OPEN and not self._transport.is_closing():
             self._write_chunks(chunks)  # (closing: the frames can no longer be delivered)
+            self._unsent_read_at = float("-inf")  # the kernel took some: read it afresh
         now_ns = time.time_ns()
         for delivery, nbytes in self._just_delivered:
             self._delivered(self.client_id, delivery, nbytes, now_ns)
@@ -323,16 +409,52 @@ class ClientLink:
             self._drain_task.cancel()
         if self._summary_timer is not None:
             self._summary_timer.cancel()
+        if self._pace_timer is not None:
+            self._pace_timer.cancel()
         self._log_summary()
         self._progress.set()
 
     # -- room and pacing ---------------------------------------------------------------------
 
     def _outside_bytes(self) -> int:
-        return self._transport.get_write_buffer_size() + self._corked
+        """Bytes handed on but not sent: framed this turn, in the transport, in the kernel."""
+        return self._transport.get_write_buffer_size() + self._corked + self._unsent_in_kernel()
 
     def _has_room(self) -> bool:
         return self._outside_bytes() <= self.room_bytes
+
+    def _unsent_in_kernel(self) -> int:
+        """The kernel's unsent bytes (at most a millisecond old); each fresh reading also
+        feeds the goodput meter and resizes the room."""
+        now_s = self._loop.time()
+        if now_s - self._unsent_read_at < UNSENT_FRESH_S or self._fd is None:
+            return self._kernel_unsent
+        self._unsent_read_at = now_s
+        try:
+            raw = fcntl.ioctl(self._fd, SIOCOUTQNSD, b"\0\0\0\0")
+        except OSError:  # not a TCP socket (a test's transport), or already closed
+            self._fd = None
+            self._kernel_unsent = 0
+            return 0
+        unsent: int = struct.unpack("i", raw)[0]
+        self._kernel_unsent = unsent
+        in_transport = self._transport.get_write_buffer_size()
+        left = self._handed - in_transport - unsent
+        self.goodput.observe(now_s, left, backed_up=unsent + in_transport > 0)
+        room = self.goodput.bytes_in(ROOM_HORIZON_S, self.max_room_bytes)
+        self.room_bytes = min(self.max_room_bytes, max(MIN_ROOM_BYTES, room))
+        return unsent
+
+    def health(self) -> LinkHealth:
+        """Goodput, round trip, unsent bytes, room and conflation of this link."""
+        return LinkHealth(
+            self.goodput.rate_bytes_per_s,
+            float(self.ws.latency),
+            self._outside_bytes(),
+            self.room_bytes,
+            dict(self.queue.conflated),
+            dict(self.reduced),
+        )
 
     def backlog_bytes(self) -> int:
         """Bytes this client has not taken yet: in the transport, framed, or queued."""
@@ -344,7 +466,7 @@ class ClientLink:
 
     def _note_progress(self) -> None:
         self._progress.set()
-        if self.queue.bytes <= self.pause_bytes:
+        if self.queue.lossless_bytes <= self.pause_bytes:
             self._backed_up_since = None
             self._stalled = False
 
@@ -355,7 +477,7 @@ class ClientLink:
 
     def wants_pause(self) -> bool:
         """Should readers feeding this link wait for it before reading on?"""
-        if self.gone or self._stalled or self.queue.bytes <= self.pause_bytes:
+        if self.gone or self._stalled or self.queue.lossless_bytes <= self.pause_bytes:
             return False
         now = self._loop.time()
         if self._backed_up_since is None:

@@ -23,6 +23,7 @@ from prometheus_client import (
 )
 from prometheus_client.core import CounterMetricFamily, GaugeMetricFamily, Metric
 
+from bridge.goodput import LinkHealth
 from bridge.roles import PrincipalCounters
 from bridge.tracing import TopicTraffic
 
@@ -44,6 +45,8 @@ class MetricsSnapshot:
     restarts: Mapping[str, int] = field(default_factory=dict)
     # What each principal (a token's subject) did, with --roles or --audit-log (bridge.roles).
     principals: Mapping[str, PrincipalCounters] = field(default_factory=dict)
+    # Each websocket client's link (goodput, round trip, conflation), by subscriber name.
+    links: Mapping[str, LinkHealth] = field(default_factory=dict)
 
 
 def safe_label(value: str) -> str:
@@ -94,6 +97,7 @@ class SnapshotCollector:
         for (topic, subscriber), count in sorted(snapshot.drops.items()):
             dropped.add_metric([safe_label(topic), safe_label(subscriber)], count)
         yield from (messages, wire, payload, dropped)
+        yield from link_metrics(snapshot.links)
         yield GaugeMetricFamily(
             "riverbridge_clients", "Connected websocket clients.", value=snapshot.clients
         )
@@ -141,6 +145,48 @@ def principal_metrics(principals: Mapping[str, PrincipalCounters]) -> Iterator[M
         for principal, counters in sorted(principals.items()):
             family.add_metric([safe_label(principal)], getattr(counters, counter))
         yield family
+
+
+def link_metrics(links: Mapping[str, LinkHealth]) -> Iterator[Metric]:
+    """Per client: goodput, round trip, unsent bytes; per topic and client: conflated and
+    reduced messages."""
+    conflated = CounterMetricFamily(
+        "riverbridge_conflated",
+        "Messages a subscription's queue_length replaced by newer ones while its client "
+        "could not take more, per topic and subscriber.",
+        labels=["topic", "subscriber"],
+    )
+    reduced = CounterMetricFamily(
+        "riverbridge_reduced",
+        "Point clouds thinned to fit a subscriber's link (reduce), per topic and subscriber.",
+        labels=["topic", "subscriber"],
+    )
+    goodput = GaugeMetricFamily(
+        "riverbridge_client_goodput_bytes_per_second",
+        "A client's link goodput, measured while its socket was backed up.",
+        labels=["subscriber"],
+    )
+    rtt = GaugeMetricFamily(
+        "riverbridge_client_rtt_seconds",
+        "Round trip of the client's last websocket keepalive ping.",
+        labels=["subscriber"],
+    )
+    unsent = GaugeMetricFamily(
+        "riverbridge_client_unsent_bytes",
+        "Bytes handed to a client's socket and not yet sent.",
+        labels=["subscriber"],
+    )
+    for subscriber, health in sorted(links.items()):
+        label = safe_label(subscriber)
+        for topic, count in sorted(health.conflated.items()):
+            conflated.add_metric([safe_label(topic), label], count)
+        for topic, count in sorted(health.reduced.items()):
+            reduced.add_metric([safe_label(topic), label], count)
+        if health.goodput_bytes_per_s is not None:
+            goodput.add_metric([label], health.goodput_bytes_per_s)
+        rtt.add_metric([label], health.rtt_s)
+        unsent.add_metric([label], health.unsent_bytes)
+    yield from (conflated, reduced, goodput, rtt, unsent)
 
 
 def render_metrics(snapshot: MetricsSnapshot) -> str:

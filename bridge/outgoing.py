@@ -13,10 +13,17 @@ from dataclasses import dataclass
 from functools import cached_property
 from typing import Any
 
+from bridge.reduction import CloudReducer, ReduceRequest, Reduction, budget_for_link
 from schemas import codec_json
 from schemas.codec_cdr import to_cdr
 from schemas.codec_png import encode_png_op
-from schemas.frames import fragments_json, publish_cbor, publish_cbor_raw, publish_json
+from schemas.frames import (
+    fragments_cbor,
+    fragments_json,
+    publish_cbor,
+    publish_cbor_raw,
+    publish_json,
+)
 from schemas.message import payload_bytes
 from schemas.registry import TypeRegistry
 
@@ -34,10 +41,12 @@ COMPRESSION_RANK = {JSON: 0, PNG: 1, CBOR: 2, CBOR_RAW: 3}
 
 @dataclass(frozen=True, slots=True)
 class WireFrame:
-    """One websocket frame: `data` is UTF-8 JSON when `text`, else binary (CBOR)."""
+    """One websocket frame: `data` is UTF-8 JSON when `text`, else binary (CBOR);
+    `reduction` says what was done to a thinned point cloud (on its first frame)."""
 
     data: bytes
     text: bool
+    reduction: Reduction | None = None
 
 
 class TopicMessage:
@@ -54,6 +63,7 @@ class TopicMessage:
     __slots__ = (
         "_frames",
         "_lock",
+        "_reducer",
         "cdr",
         "cdr_bytes",
         "msg",
@@ -84,8 +94,9 @@ class TopicMessage:
         self.cdr = cdr
         self.cdr_bytes = cdr_bytes
         self.size_hint = payload_bytes(msg) if size_hint is None else size_hint
-        self._frames: dict[tuple[str, str], WireFrame] = {}
+        self._frames: dict[tuple[str, str] | tuple[str, str, float], WireFrame] = {}
         self._lock = threading.RLock()  # png re-enters for the JSON frame
+        self._reducer: CloudReducer | None = None
 
     def frame(self, encoding: str, topic: str) -> WireFrame:
         """The `publish` frame for `encoding` naming the topic as `topic` (thread-safe)."""
@@ -109,6 +120,29 @@ class TopicMessage:
                     self.cdr = to_cdr(self.registry, self.type_name, self.msg)
         return self.cdr
 
+    def reducer(self) -> CloudReducer:
+        """The message's point-cloud reductions, shared by its subscribers (thread-safe)."""
+        with self._lock:
+            if self._reducer is None:
+                self._reducer = CloudReducer(self.msg)
+            return self._reducer
+
+    def reduced_frame(self, encoding: str, topic: str, voxel_size_m: float) -> WireFrame:
+        """The `publish` frame of the cloud thinned to one point per voxel (cbor or JSON;
+        png and cbor-raw clients get JSON and cbor)."""
+        key = (encoding, topic, voxel_size_m)
+        cached = self._frames.get(key)
+        if cached is not None:
+            return cached
+        msg, reduction = self.reducer().reduced(voxel_size_m)
+        said = reduction.as_field()
+        if encoding in (CBOR, CBOR_RAW):
+            frame = WireFrame(publish_cbor(topic, msg, said), text=False, reduction=reduction)
+        else:
+            frame = WireFrame(publish_json(topic, msg, said), text=True, reduction=reduction)
+        with self._lock:
+            return self._frames.setdefault(key, frame)
+
     def _encode(self, encoding: str, topic: str) -> WireFrame:
         if encoding == CBOR:
             return WireFrame(publish_cbor(topic, self.msg), text=False)
@@ -121,11 +155,13 @@ class TopicMessage:
 
 @dataclass(frozen=True, slots=True)
 class Delivery:
-    """A topic message for one client: its topic spelling and chosen encoding."""
+    """A topic message for one client: its topic spelling, chosen encoding and, for a point
+    cloud, the reduction its subscription asked for (`bridge.reduction`)."""
 
     message: TopicMessage
     topic: str
     encoding: str
+    reduce: ReduceRequest | None = None
 
     @property
     def size_hint(self) -> int:
@@ -135,8 +171,17 @@ class Delivery:
     def message_id(self) -> Any:
         return None
 
-    def frame(self) -> WireFrame:
-        return self.message.frame(self.encoding, self.topic)
+    def frame(self, link_bytes_per_s: float | None = None) -> WireFrame:
+        """The frame for this client; an "auto" reduction sizes the cloud to
+        `link_bytes_per_s`, the client's measured goodput (None: unmeasured)."""
+        if self.reduce is None:
+            return self.message.frame(self.encoding, self.topic)
+        reducer = self.message.reducer()
+        step = int(self.message.msg.get("point_step", 0) or 0)
+        voxel_m = reducer.voxel_for(self.reduce, budget_for_link(link_bytes_per_s, step))
+        if voxel_m is None:
+            return self.message.frame(self.encoding, self.topic)
+        return self.message.reduced_frame(self.encoding, self.topic, voxel_m)
 
 
 @dataclass(frozen=True)
@@ -157,7 +202,7 @@ class ControlMessage:
     def message_id(self) -> Any:
         return self.payload.get("id")
 
-    def frame(self) -> WireFrame:
+    def frame(self, link_bytes_per_s: float | None = None) -> WireFrame:
         return self.wire
 
     @cached_property
@@ -180,24 +225,37 @@ class RawFrame:
     def message_id(self) -> Any:
         return None
 
-    def frame(self) -> WireFrame:
+    def frame(self, link_bytes_per_s: float | None = None) -> WireFrame:
         return self.wire
 
 
 Outgoing = Delivery | ControlMessage | RawFrame
 
 
-def render(item: Outgoing, fragment_size: int | None, fallback_id: str) -> list[WireFrame]:
-    """The frames that carry `item`, split into `fragment` ops when text exceeds the size.
+def render(
+    item: Outgoing,
+    fragment_size: int | None,
+    fallback_id: str,
+    link_bytes_per_s: float | None = None,
+) -> list[WireFrame]:
+    """The frames that carry `item`, split into `fragment` ops when longer than the size.
 
-    `fragment_size` counts characters of the JSON text (ASCII, so bytes); binary frames are
-    never fragmented (protocol §2.10). Fragments carry the message's own id, else
-    `fallback_id`, and an integer `total`.
+    `fragment_size` counts characters of the JSON text (ASCII, so bytes), or bytes of a CBOR
+    frame: rosbridge never fragments binary frames (protocol §2.10), riverbridge does when a
+    CBOR subscriber asks for it, into binary `fragment` ops whose `data` is a byte string
+    (docs/bridge.md, "Over a thin link"). Fragments carry the message's own id, else
+    `fallback_id`, and an integer `total`. `link_bytes_per_s` (the client's goodput) sizes an
+    "auto" point-cloud reduction; the first frame carries what was done.
     """
-    frame = item.frame()
-    if fragment_size is None or not frame.text or len(frame.data) <= fragment_size:
+    frame = item.frame(link_bytes_per_s)
+    if fragment_size is None or len(frame.data) <= fragment_size:
         return [frame]
     message_id = item.message_id
     fragment_id = fallback_id if message_id is None else message_id
-    pieces = fragments_json(frame.data.decode("ascii"), fragment_size, fragment_id)
-    return [WireFrame(piece, text=True) for piece in pieces]
+    if not frame.text:
+        pieces = fragments_cbor(frame.data, fragment_size, fragment_id)
+    else:
+        pieces = fragments_json(frame.data.decode("ascii"), fragment_size, fragment_id)
+    frames = [WireFrame(piece, text=frame.text) for piece in pieces]
+    frames[0] = WireFrame(frames[0].data, frame.text, frame.reduction)
+    return frames

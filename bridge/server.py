@@ -27,6 +27,7 @@ from bridge.access import HandshakePolicy, handshake_token, tls_context
 from bridge.config import BridgeConfig
 from bridge.core import BridgeCore
 from bridge.effects import Close, DeadlineKey, Effect, Hold, Schedule, Send
+from bridge.goodput import LinkHealth
 from bridge.http import HttpRoutes
 from bridge.intake import Intake
 from bridge.link import WRITE_HIGH_WATER, ClientLink, Delivered
@@ -315,6 +316,11 @@ class BridgeServer:
         """Messages per topic the client's send queue dropped (empty if it is gone)."""
         link = self.links.get(client_id)
         return link.queue.dropped if link is not None else {}
+
+    def link_health(self, client_id: int) -> LinkHealth | None:
+        """Goodput, round trip and conflation of a websocket client's link (None if gone)."""
+        link = self.links.get(client_id)
+        return link.health() if link is not None else None
 
     def stats(self) -> dict[int, dict[str, object]]:
         """Per connected client: frames sent, messages dropped per topic, items waiting and

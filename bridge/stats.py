@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING, Any
 from websockets.asyncio.server import ServerConnection
 from websockets.http11 import Request, Response
 
+from bridge.goodput import LinkHealth
 from bridge.graph import BRIDGE_NODE
 from bridge.host import PluginHost
 from bridge.http import respond
@@ -91,6 +92,15 @@ class BridgeTelemetry:
                     drops[(topic, name)] = count
         return drops
 
+    def links(self) -> dict[str, LinkHealth]:
+        """Each websocket client's link health, by subscriber name."""
+        links: dict[str, LinkHealth] = {}
+        for client_id in self._host.clients():
+            health = self._host.link_health(client_id)
+            if health is not None:
+                links[self.tracer.subscriber_name(client_id)] = health
+        return links
+
     def snapshot(self) -> MetricsSnapshot:
         return MetricsSnapshot(
             dict(self.tracer.topics),
@@ -101,6 +111,7 @@ class BridgeTelemetry:
             self.tracer.spans.discarded,
             self.restarts(),
             dict(self._host.principal_counters()),
+            self.links(),
         )
 
     def restarts(self) -> dict[str, int]:

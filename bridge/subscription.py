@@ -18,6 +18,7 @@ from collections import deque
 from dataclasses import dataclass
 
 from bridge.outgoing import COMPRESSION_RANK, JSON, TopicMessage
+from bridge.reduction import ReduceRequest
 from schemas.values import OpId
 
 NS_PER_MS = 1_000_000
@@ -31,6 +32,7 @@ class SubscribeSettings:
     queue_length: int = 0
     fragment_size: int | None = None
     compression: str = JSON
+    reduce: ReduceRequest | None = None  # riverbridge: a PointCloud2 thinned to fit the link
 
     @staticmethod
     def known_compression(name: str | None) -> str:
@@ -41,7 +43,10 @@ class SubscribeSettings:
 def combine(settings: list[SubscribeSettings]) -> SubscribeSettings:
     """Least common denominator over a client's ids (protocol §5)."""
     fragment_sizes = [s.fragment_size for s in settings if s.fragment_size is not None]
+    reductions = {s.reduce for s in settings}
     return SubscribeSettings(
+        # reduced only if every id asks for the same reduction: one asking the whole cloud wins
+        reduce=reductions.pop() if len(reductions) == 1 else None,
         throttle_ms=min(s.throttle_ms for s in settings),
         queue_length=min(s.queue_length for s in settings),
         fragment_size=min(fragment_sizes) if fragment_sizes else None,

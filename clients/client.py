@@ -280,16 +280,23 @@ class RosbridgeClient:
         compression: Compression | None = None,
         maxsize: int = DEFAULT_MAXSIZE,
         bytes_as_numpy: bool = False,
+        fragment_size: int | None = None,
+        reduce: Mapping[str, Any] | None = None,
     ) -> Subscription:
         """Subscribe to ``topic``; returns an async iterator of :class:`clients.Received`.
 
         type : message type; when given, messages arrive in canonical form (JSON base64 ->
             bytes, lists -> ndarrays, defaults filled). Unknown types raise SchemaError here.
         throttle_rate : minimum milliseconds between messages, applied by the bridge.
-        queue_length : bridge-side queue for this subscription (0: send immediately).
+        queue_length : while the link cannot take more, the bridge keeps only this many newest
+            messages (0: every message, within its send buffer).
         compression : "none", "png", "cbor", "cbor-raw"; default follows the encoding.
         maxsize : local queue length; when full the oldest message is dropped and counted.
         bytes_as_numpy : deliver ``bytes`` fields as read-only uint8 ndarray views.
+        fragment_size : the bridge cuts larger messages into fragments this long, sent with
+            other topics' messages between them (docs/bridge.md, "Over a thin link").
+        reduce : a PointCloud2 thinned by the bridge: ``{"voxel_size": m}``,
+            ``{"point_budget": n}`` or ``{"point_budget": "auto"}`` (what the link carries).
 
         Works before the topic has a publisher, before ``connect()`` and while reconnecting
         (the subscription is then sent when the connection opens).
@@ -300,6 +307,8 @@ class RosbridgeClient:
             throttle_rate_ms=throttle_rate,
             queue_length=queue_length,
             compression=compression,
+            fragment_size=fragment_size,
+            reduce=reduce,
         )
         sub = Subscription(
             topic=topic,

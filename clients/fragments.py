@@ -8,6 +8,9 @@ characters and sends each as ``{"op":"fragment","id","num","total","data"}``. Qu
 - every fragmented ``publish`` carries fragment id 0, so ids are reused message after message;
   a piece numbered 0 for an id that already holds a piece 0 starts a new message.
 - pieces are joined in ``num`` order, whatever order they arrived in.
+- pieces of different messages may arrive interleaved, and whole messages between them.
+- riverbridge cuts a CBOR frame into binary fragments whose ``data`` is a byte string: their
+  join is the CBOR frame (docs/bridge.md, "Over a thin link").
 
 There is no clock here (sans-I/O): instead of rosbridge's 600 s expiry, at most
 ``max_partial`` unfinished messages are kept and the oldest is discarded beyond that.
@@ -27,15 +30,16 @@ DEFAULT_MAX_PARTIAL = 8
 @dataclass(slots=True)
 class _Partial:
     total: int
-    pieces: dict[int, str] = field(default_factory=dict)
+    pieces: dict[int, str | bytes] = field(default_factory=dict)
     wire_bytes: int = 0
 
 
 @dataclass(frozen=True, slots=True)
 class Reassembled:
-    """The complete JSON text of a fragmented op and the bytes its fragments took on the wire."""
+    """The complete JSON text (or CBOR bytes) of a fragmented op and the bytes its fragments
+    took on the wire."""
 
-    text: str
+    text: str | bytes
     wire_bytes: int
 
 
@@ -71,8 +75,12 @@ class FragmentAssembler:
         if len(partial.pieces) < partial.total:
             return None
         del self._partials[key]
-        text = "".join(partial.pieces[i] for i in range(partial.total))
-        return Reassembled(text, partial.wire_bytes)
+        pieces = [partial.pieces[i] for i in range(partial.total)]
+        if all(isinstance(piece, bytes) for piece in pieces):
+            return Reassembled(b"".join(pieces), partial.wire_bytes)  # type: ignore[arg-type]
+        if all(isinstance(piece, str) for piece in pieces):
+            return Reassembled("".join(pieces), partial.wire_bytes)  # type: ignore[arg-type]
+        raise ProtocolError(f"fragments of {key!r} mix text and bytes")
 
     def _start(self, key: str | int, total: int) -> _Partial:
         self._partials.pop(key, None)

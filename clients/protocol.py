@@ -65,6 +65,8 @@ class SubscriptionRecord:
     throttle_rate_ms: int
     queue_length: int
     compression: Compression
+    fragment_size: int | None = None
+    reduce: Mapping[str, Any] | None = None
 
 
 @dataclass(frozen=True, slots=True)
@@ -173,6 +175,8 @@ class ClientProtocol:
         throttle_rate_ms: int = 0,
         queue_length: int = 0,
         compression: Compression | None = None,
+        fragment_size: int | None = None,
+        reduce: Mapping[str, Any] | None = None,
     ) -> tuple[str, Frame]:
         """Register a subscription; return its id and the ``subscribe`` frame.
 
@@ -189,6 +193,8 @@ class ClientProtocol:
             int(throttle_rate_ms),
             int(queue_length),
             compression or self.default_compression(),
+            fragment_size,
+            reduce,
         )
         frame = _subscribe_frame(record)
         self._subs[sub_id] = record
@@ -495,13 +501,20 @@ class _CallOptions(TypedDict, total=False):
 
 
 class _SubscribeType(TypedDict, total=False):
-    """A `subscribe` names its type only when the caller gave one (roslibpy sends null)."""
+    """A `subscribe` names its type and fragment size only when the caller gave one
+    (roslibpy sends null)."""
 
     type: str
+    fragment_size: int
+    reduce: dict[str, Any]
 
 
 def _subscribe_frame(record: SubscriptionRecord) -> Frame:
     typed: _SubscribeType = {} if record.type is None else {"type": record.type}
+    if record.fragment_size is not None:
+        typed["fragment_size"] = record.fragment_size
+    if record.reduce is not None:
+        typed["reduce"] = dict(record.reduce)
     return op_frame(
         ops.Subscribe,
         id=record.sub_id,

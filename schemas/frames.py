@@ -1,6 +1,6 @@
 """The frames of the ops sent per message: ``publish`` and ``fragment``, without a model.
 
-These two ops go out once per message (a scan cut at 1000 characters is thousands of
+These ops go out once per message (a scan cut at 1000 characters is thousands of
 fragments), so they are written by typed functions instead of building their
 `schemas.ops.Publish` / `schemas.ops.Fragment` model each time (~6 µs a model, more than
 encoding an Imu frame); tests/schemas/test_schema_frames.py reads every frame back through
@@ -16,13 +16,18 @@ from schemas.values import Message, OpId
 _NS_PER_S = 1_000_000_000
 
 
-def publish_json(topic: str, msg: Message) -> bytes:
-    """Text frame ``{"op":"publish","topic":T,"msg":M}`` (ASCII JSON, bytes as base64)."""
+def publish_json(topic: str, msg: Message, reduced: Message | None = None) -> bytes:
+    """Text frame ``{"op":"publish","topic":T,"msg":M}`` (ASCII JSON, bytes as base64), with
+    ``"reduced":R`` after ``msg`` when the bridge thinned the message (docs/bridge.md)."""
+    if reduced is not None:
+        return codec_json.dumps({"op": "publish", "topic": topic, "msg": msg, "reduced": reduced})
     return codec_json.dumps({"op": "publish", "topic": topic, "msg": msg})
 
 
-def publish_cbor(topic: str, msg: Message) -> bytes:
+def publish_cbor(topic: str, msg: Message, reduced: Message | None = None) -> bytes:
     """Binary frame of the same map in CBOR, numeric sequences as typed-array tags."""
+    if reduced is not None:
+        return codec_cbor.dumps({"op": "publish", "topic": topic, "msg": msg, "reduced": reduced})
     return codec_cbor.dumps({"op": "publish", "topic": topic, "msg": msg})
 
 
@@ -50,6 +55,27 @@ def fragments_json(text: str, fragment_size: int, fragment_id: OpId) -> list[byt
                 "op": "fragment",
                 "id": fragment_id,
                 "data": text[num * fragment_size : (num + 1) * fragment_size],
+                "num": num,
+                "total": total,
+            }
+        )
+        for num in range(total)
+    ]
+
+
+def fragments_cbor(data: bytes, fragment_size: int, fragment_id: OpId) -> list[bytes]:
+    """Binary frames ``{"op":"fragment","id","data","num","total"}`` carrying the CBOR frame
+    `data` in slices of `fragment_size` bytes, ``data`` a byte string (docs/bridge.md, "Over a
+    thin link": rosbridge never fragments binary frames, and only clients that join byte
+    slices, such as riverbridge's own, can read these; they are sent only on request)."""
+    total = -(-len(data) // fragment_size)
+    view = memoryview(data)
+    return [
+        codec_cbor.dumps(
+            {
+                "op": "fragment",
+                "id": fragment_id,
+                "data": bytes(view[num * fragment_size : (num + 1) * fragment_size]),
                 "num": num,
                 "total": total,
             }

@@ -20,6 +20,7 @@ from pydantic import (
     Field,
     PlainValidator,
     StrictBool,
+    StrictBytes,
     StrictInt,
     StrictStr,
     StringConstraints,
@@ -137,6 +138,8 @@ class Subscribe(OpBase):
     fragment_size: StrictInt | None = None
     compression: StrictStr = "none"
     qos: JsonObject | None = None
+    # riverbridge: thin a PointCloud2 to fit the link (docs/bridge.md, "Over a thin link")
+    reduce: JsonObject | None = None
 
 
 class Unsubscribe(OpBase):
@@ -242,7 +245,9 @@ def _fragment_id(value: JsonValue) -> str | int:
 class Fragment(OpBase):
     op: Literal["fragment"] = "fragment"
     id: Annotated[str | int, PlainValidator(_fragment_id)]  # keys the pieces of one message
-    data: StrictStr
+    # text: a slice of a JSON op; bytes: a slice of a CBOR frame (riverbridge's binary
+    # fragments, docs/bridge.md "Over a thin link")
+    data: StrictStr | StrictBytes
     num: StrictInt  # 0 <= num < total, checked against the first fragment's total
     total: Annotated[StrictInt, Field(ge=1)]  # rosbridge sends a float ((len-1)/size + 1)
 

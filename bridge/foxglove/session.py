@@ -51,7 +51,7 @@ class FoxgloveDelivery(Delivery):
     subscription_id: int = 0
     timestamp_ns: int = 0
 
-    def frame(self) -> WireFrame:
+    def frame(self, link_bytes_per_s: float | None = None) -> WireFrame:
         head = wire.message_data_header(self.subscription_id, self.timestamp_ns)
         return WireFrame(head + self.message.serialized(), text=False)
 
@@ -326,7 +326,13 @@ class FoxgloveSession:
             return [
                 Send(
                     self.client_id,
-                    FoxgloveDelivery(item.message, item.topic, CBOR_RAW, sub_id, stamp_ns),
+                    FoxgloveDelivery(
+                        item.message,
+                        item.topic,
+                        CBOR_RAW,
+                        subscription_id=sub_id,
+                        timestamp_ns=stamp_ns,
+                    ),
                     send.drop_key,
                 )
                 for sub_id in self.by_topic.get(item.message.topic, ())

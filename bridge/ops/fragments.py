@@ -21,6 +21,8 @@ MESSAGE_TOO_BIG = 1009  # RFC 6455 close code, as websockets uses for an oversiz
 
 def handle_fragment(ctx: Context, session: ClientSession, op: Fragment) -> None:
     key, total = op.id, op.total
+    if not isinstance(op.data, str):
+        raise OpFailure("fragment data must be text (a slice of a JSON op)")
     if not 0 <= op.num < total:
         raise OpFailure(f"fragment num {op.num!r} outside 0..{total - 1}")
     buffer = session.fragments.get(key)

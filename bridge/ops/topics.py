@@ -10,6 +10,7 @@ from bridge.graph import TopicEntry
 from bridge.names import absolute_name, allowed
 from bridge.ops import Route, route
 from bridge.outgoing import JSON, MIN_FRAGMENT_SIZE, PNG, TopicMessage
+from bridge.reduction import POINTCLOUD2, ReduceRequest
 from bridge.session import ClientSession, StatusLevel
 from bridge.subscription import SubscribeSettings, Subscription
 from bridge.validation import CheckedMessage, InvalidMessage, check_message
@@ -126,7 +127,12 @@ def checked_message(ctx: Context, spec: MessageSpec, op: PublishFields) -> Check
 
 def subscribe_settings(op: Subscribe) -> SubscribeSettings:
     fragment_size = op.fragment_size if op.fragment_size and op.fragment_size > 0 else None
+    try:
+        reduce = None if op.reduce is None else ReduceRequest.from_op(op.reduce)
+    except ValueError as exc:
+        raise OpFailure(str(exc)) from None
     return SubscribeSettings(
+        reduce=reduce,
         throttle_ms=max(0, op.throttle_rate),
         queue_length=max(0, op.queue_length),
         fragment_size=None if fragment_size is None else max(fragment_size, MIN_FRAGMENT_SIZE),
@@ -152,6 +158,15 @@ def handle_subscribe(ctx: Context, session: ClientSession, op: Subscribe) -> Non
     if op.qos:
         entry.subscriber_qos[session.node] = op.qos
     settings = subscribe_settings(op)
+    if settings.reduce is not None and entry.type_name not in POINTCLOUD2:
+        ctx.problem(
+            session,
+            "subscribe",
+            op.id,
+            f"reduce applies to sensor_msgs/msg/PointCloud2, not {entry.type_name}; ignored",
+            StatusLevel.WARNING,
+        )
+        settings = replace(settings, reduce=None)
     if settings.compression == PNG and not png_available():
         ctx.problem(session, "subscribe", op.id, f"{PNG_NEEDS}; sending JSON", StatusLevel.WARNING)
         settings = replace(settings, compression=JSON)

@@ -66,15 +66,15 @@ PROFILES: dict[str, LinkProfile] = {
     # 802.11n/ac across a quay: about 20 Mbit/s of goodput, 10 ms each way, a few ms jitter.
     "wifi": LinkProfile(
         name="wifi",
-        to_client=_direction(20, 10, 5, 50),
-        to_server=_direction(20, 10, 5, 50),
+        to_client=_direction(20, 10, 5, 30),
+        to_server=_direction(20, 10, 5, 30),
     ),
     # LTE from a vessel near the coast: about 10 Mbit/s up, 30 Mbit/s down, 30 ms each way,
     # 10 ms jitter, and a stall of about 0.3 s a minute (cell changes, fading).
     "4g": LinkProfile(
         name="4g",
-        to_client=_direction(10, 30, 10, 60),
-        to_server=_direction(30, 30, 10, 60),
+        to_client=_direction(10, 30, 10, 30),
+        to_server=_direction(30, 30, 10, 30),
         stall_every_s=60.0,
         stall_ms=300.0,
     ),

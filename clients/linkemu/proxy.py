@@ -20,8 +20,10 @@ import logging
 import random
 import socket
 from collections import deque
+from collections.abc import Coroutine
 from dataclasses import dataclass, field
 from types import TracebackType
+from typing import Any
 
 from clients.linkemu.profiles import Direction, LinkProfile, profile_named
 from clients.linkemu.timing import DirectionTiming, StallSchedule
@@ -30,8 +32,9 @@ logger = logging.getLogger("clients.linkemu")
 
 # Kernel buffers of the proxy's sockets: small, so that the bytes waiting for the link stay in
 # the emulated queue (bounded) and the sender's own socket, not in loopback buffers megabytes
-# deep that no real link has.
-SOCKET_BUFFER_BYTES = 32 * 1024
+# deep that no real link has. (The kernel doubles the figure and advertises about half.) The
+# proxy reads its sockets itself, only when the queue has room: no stream buffer hides bytes.
+SOCKET_BUFFER_BYTES = 8 * 1024
 DIRECTIONS = ("to_client", "to_server")
 # The segment size the proxy's sockets announce: Ethernet's, not loopback's 64 KiB, whose
 # segments would let the peer's kernel size its send buffer at megabytes (ten initial segments
@@ -73,15 +76,15 @@ class LinkEmulator:
         self._host, self._port = host, port
         self._rng = random.Random(seed)
         self._stalls = StallSchedule(self.profile.stall_every_s, self.profile.stall_ms, self._rng)
-        self._server: asyncio.Server | None = None
+        self._listener: socket.socket | None = None
         self._tasks: set[asyncio.Task[None]] = set()
         self._epoch = 0.0
 
     @property
     def port(self) -> int:
-        if self._server is None:
+        if self._listener is None:
             raise RuntimeError("the link emulator is not running")
-        port: int = self._server.sockets[0].getsockname()[1]
+        port: int = self._listener.getsockname()[1]
         return port
 
     def now_s(self) -> float:
@@ -93,21 +96,20 @@ class LinkEmulator:
         return self._stalls.stalled_s(self.now_s())
 
     async def start(self) -> None:
-        listener = socket.create_server((self._host, self._port), reuse_port=False)
+        listener = socket.create_server((self._host, self._port))
         _small_buffers(listener)  # accepted sockets inherit the buffer sizes
         listener.setblocking(False)
+        self._listener = listener
         self._epoch = asyncio.get_running_loop().time()
-        self._server = await asyncio.start_server(self._accept, sock=listener)
+        self._spawn(self._accept_forever(listener))
 
     async def stop(self) -> None:
-        if self._server is not None:
-            self._server.close()
         for task in list(self._tasks):
             task.cancel()
         await asyncio.gather(*self._tasks, return_exceptions=True)
-        if self._server is not None:
-            await self._server.wait_closed()
-            self._server = None
+        if self._listener is not None:
+            self._listener.close()
+            self._listener = None
 
     async def __aenter__(self) -> LinkEmulator:
         await self.start()
@@ -121,48 +123,51 @@ class LinkEmulator:
     ) -> None:
         await self.stop()
 
-    def _accept(self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
-        task = asyncio.get_running_loop().create_task(self._carry(reader, writer))
+    def _spawn(self, coro: Coroutine[Any, Any, None]) -> None:
+        task = asyncio.get_running_loop().create_task(coro)
         self._tasks.add(task)
         task.add_done_callback(self._tasks.discard)
 
-    async def _connect_upstream(self) -> tuple[asyncio.StreamReader, asyncio.StreamWriter]:
+    async def _accept_forever(self, listener: socket.socket) -> None:
         loop = asyncio.get_running_loop()
+        while True:
+            client, _ = await loop.sock_accept(listener)
+            client.setblocking(False)
+            self._spawn(self._carry(client))
+
+    async def _connect_upstream(self) -> socket.socket:
         sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
         try:
             _small_buffers(sock)  # before connecting, so the window is small from the start
             sock.setblocking(False)
-            await loop.sock_connect(sock, self.upstream)
+            await asyncio.get_running_loop().sock_connect(sock, self.upstream)
         except BaseException:
             sock.close()
             raise
-        return await asyncio.open_connection(sock=sock)
+        return sock
 
-    async def _carry(self, client_r: asyncio.StreamReader, client_w: asyncio.StreamWriter) -> None:
-        """One connection: pump both ways until either side closes, then close both."""
+    async def _carry(self, client: socket.socket) -> None:
+        """One connection: pump both ways until both sides are done, then close both."""
         self.stats.connections += 1
         try:
-            server_r, server_w = await self._connect_upstream()
+            server = await self._connect_upstream()
         except OSError as exc:
             logger.warning("link emulator: cannot reach upstream %s: %s", self.upstream, exc)
-            client_w.close()
+            client.close()
             return
-        up = self._pump(client_r, server_w, self.profile.to_server, "to_server")
-        down = self._pump(server_r, client_w, self.profile.to_client, "to_client")
         try:
-            await asyncio.gather(up, down)
+            await asyncio.gather(
+                self._pump(client, server, self.profile.to_server, "to_server"),
+                self._pump(server, client, self.profile.to_client, "to_client"),
+            )
         finally:
-            for writer in (client_w, server_w):
-                writer.close()
+            client.close()
+            server.close()
 
     async def _pump(
-        self,
-        source: asyncio.StreamReader,
-        sink: asyncio.StreamWriter,
-        direction_profile: Direction,
-        name: str,
+        self, source: socket.socket, sink: socket.socket, direction: Direction, name: str
     ) -> None:
-        timing = DirectionTiming(direction_profile, self._stalls, self._rng)
+        timing = DirectionTiming(direction, self._stalls, self._rng)
         arrivals: deque[tuple[float, bytes]] = deque()
         ready = asyncio.Event()
         deliver = asyncio.get_running_loop().create_task(self._deliver(sink, arrivals, ready))
@@ -175,19 +180,19 @@ class LinkEmulator:
                 await deliver
             if not deliver.done():
                 deliver.cancel()
-            with contextlib.suppress(Exception):
-                if sink.can_write_eof():
-                    sink.write_eof()  # the other end learns that this side is done
+            with contextlib.suppress(OSError):
+                sink.shutdown(socket.SHUT_WR)  # the other end learns that this side is done
 
     async def _admit(
         self,
-        source: asyncio.StreamReader,
+        source: socket.socket,
         timing: DirectionTiming,
         arrivals: deque[tuple[float, bytes]],
         ready: asyncio.Event,
         name: str,
     ) -> None:
         """Read `source` a chunk at a time, each only once the bottleneck queue has room."""
+        loop = asyncio.get_running_loop()
         chunk = min(timing.chunk_bytes(), timing.direction.buffer_bytes)
         while True:
             now_s = self.now_s()
@@ -195,8 +200,8 @@ class LinkEmulator:
             if wait_s > 0:
                 await asyncio.sleep(wait_s)
             try:
-                data = await source.read(chunk)
-            except (ConnectionError, OSError):
+                data = await loop.sock_recv(source, chunk)
+            except OSError:
                 return
             if not data:
                 return
@@ -212,9 +217,10 @@ class LinkEmulator:
             self._stalls.forget_before(now_s - 60)
 
     async def _deliver(
-        self, sink: asyncio.StreamWriter, arrivals: deque[tuple[float, bytes]], ready: asyncio.Event
+        self, sink: socket.socket, arrivals: deque[tuple[float, bytes]], ready: asyncio.Event
     ) -> None:
         """Write each chunk to `sink` once its arrival time has come; end at the end marker."""
+        loop = asyncio.get_running_loop()
         while True:
             while not arrivals:
                 ready.clear()
@@ -230,7 +236,6 @@ class LinkEmulator:
             while arrivals and arrivals[0][1] and arrivals[0][0] <= now_s:
                 due.append(arrivals.popleft()[1])
             try:
-                sink.write(b"".join(due))
-                await sink.drain()
-            except (ConnectionError, OSError):
+                await loop.sock_sendall(sink, b"".join(due))
+            except OSError:
                 return

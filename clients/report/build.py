@@ -16,7 +16,7 @@ from clients.report.closed_loop import closed_loop
 from clients.report.journeys import SpanRecord, by_topic, hosts_of, journeys, stage_values
 from clients.report.mission import AutopilotSeen, mission
 from clients.report.quality import lidar_quality, pair_by_stamp, radar_quality
-from clients.report.results import DetectionQuality, Machine, ProcessSummary, Run
+from clients.report.results import DetectionQuality, Machine, ProcessSummary, Run, ShoreLink
 from clients.report.sockets import SocketBytes, SocketTraffic, window_traffic
 from clients.report.stats import network_summary, process_summary, topic_summary
 from clients.report.thesis import Measured, thesis_comparison
@@ -59,6 +59,7 @@ class Observations:
     machine: Machine | None = None
     profile: str | None = None
     autopilot: AutopilotSeen | None = None
+    shore_link: ShoreLink | None = None
 
 
 def build_run(seen: Observations) -> Run:
@@ -89,6 +90,7 @@ def build_run(seen: Observations) -> Run:
         closed_loop=closed_loop(seen.spans),
         mission=mission(seen.autopilot) if seen.autopilot is not None else None,
         stage_values={t: stage_values(items) for t, items in grouped.items()},
+        shore_link=seen.shore_link,
     )
 
 

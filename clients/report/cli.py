@@ -31,6 +31,7 @@ from pathlib import Path
 from typing import Any, TextIO
 
 from clients.errors import RosbridgeError
+from clients.linkemu import PROFILES as LINK_PROFILES
 from clients.node.cli import positive_seconds
 from clients.node.output import PrefixedOutput
 from clients.protocol import Encoding
@@ -95,7 +96,7 @@ async def run_stack(
         progress.message(f"{label}: stack ready at {url}")
         name = f"{encoding} replay" if args.replay is not None else encoding
         task = asyncio.create_task(
-            measure(url, name, args.duration, args.warmup, progress, profile)
+            measure(url, name, args.duration, args.warmup, progress, profile, args.link)
         )
         task.add_done_callback(lambda _: stop.set())
         measuring.append(task)
@@ -214,6 +215,14 @@ def build_parser() -> argparse.ArgumentParser:
         "encoding, FILE.<encoding>.mcap, when several run)",
     )
     parser.add_argument(
+        "--link",
+        choices=sorted(LINK_PROFILES),
+        metavar="PROFILE",
+        help="also read the IMU and LIDAR ashore through an emulated link (lan, wifi, 4g; "
+        "docs/linkemu.md), one client per mode: plain, fresh (queue_length 1, "
+        "fragment_size 65536), reduced (and reduce auto); docs/bridge.md 'Over a thin link'",
+    )
+    parser.add_argument(
         "--replay",
         type=recording_file,
         metavar="FILE.mcap",
@@ -267,9 +276,17 @@ def _sets_profile(path: Path) -> bool:
 async def _run_all(args: argparse.Namespace, progress: Progress, log_stream: TextIO) -> list[Run]:
     if args.bridge is not None:
         if args.record is None:
-            return [await measure(args.bridge, "attached", args.duration, args.warmup, progress)]
+            return [
+                await measure(
+                    args.bridge, "attached", args.duration, args.warmup, progress, link=args.link
+                )
+            ]
         async with recorder_process(args.bridge, args.record):
-            return [await measure(args.bridge, "attached", args.duration, args.warmup, progress)]
+            return [
+                await measure(
+                    args.bridge, "attached", args.duration, args.warmup, progress, link=args.link
+                )
+            ]
     runs = []
     with tempfile.TemporaryDirectory(prefix="riverbridge-report-") as folder:
         for profile in args.profile:

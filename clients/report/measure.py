@@ -13,6 +13,7 @@ import contextlib
 import math
 import os
 import time
+import urllib.parse
 from pathlib import Path
 from typing import Any, TextIO
 
@@ -27,6 +28,7 @@ from clients.report.build import (
 from clients.report.journeys import spans_of_batch
 from clients.report.mission import AutopilotSeen
 from clients.report.results import Machine, Run
+from clients.report.shore import ShoreWatch
 from clients.report.sockets import SS_COMMAND, SocketBytes, parse_ss
 from clients.report.stats import loopback_tx_bytes
 from clients.subscription import Subscription
@@ -127,8 +129,28 @@ async def measure(
     warmup_s: float,
     progress: Progress,
     profile: str | None = None,
+    link: str | None = None,
 ) -> Run:
-    """Read the telemetry of the stack at ``url`` for ``duration_s`` after ``warmup_s``."""
+    """Read the telemetry of the stack at ``url`` for ``duration_s`` after ``warmup_s``; with
+    ``link`` (a `clients.linkemu` profile), also the IMU and LIDAR ashore (`shore.py`)."""
+    async with contextlib.AsyncExitStack() as stack:
+        shore = None
+        if link is not None:
+            parts = urllib.parse.urlsplit(url)
+            bridge = (parts.hostname or "127.0.0.1", parts.port or 9090)
+            shore = await stack.enter_async_context(ShoreWatch(link, bridge))
+        return await _measure(url, encoding, duration_s, warmup_s, progress, profile, shore)
+
+
+async def _measure(
+    url: str,
+    encoding: str,
+    duration_s: float,
+    warmup_s: float,
+    progress: Progress,
+    profile: str | None,
+    shore: ShoreWatch | None,
+) -> Run:
     label = encoding if profile in (None, "default") else f"{profile}/{encoding}"
     async with RosbridgeClient(
         url, encoding="cbor", name="report", reconnect=False, connect_timeout=3.0
@@ -179,6 +201,7 @@ async def measure(
             machine=Machine(os.cpu_count(), load),
             profile=profile,
             autopilot=autopilot_seen(watched, start_ns, end_ns, config[-1] if config else None),
+            shore_link=shore.summary(start_ns, end_ns) if shore is not None else None,
         )
     return build_run(seen)
 

@@ -339,6 +339,37 @@ class Mission:
 
 
 @dataclass(frozen=True)
+class ShoreTopic:
+    """One topic as a shore client got it: rate, share of what was published, ages (ms)."""
+
+    topic: str
+    received: int
+    per_s: float
+    delivered_share: float | None
+    age_p50_ms: float | None
+    age_p99_ms: float | None
+
+
+@dataclass(frozen=True)
+class ShoreMode:
+    """One shore client: its scan subscription's options and what it got."""
+
+    mode: str
+    options: str
+    imu: ShoreTopic
+    lidar: ShoreTopic
+    points_kept_p50: float | None = None
+
+
+@dataclass(frozen=True)
+class ShoreLink:
+    """The stack read through an emulated link, one client per mode."""
+
+    profile: str
+    modes: tuple[ShoreMode, ...] = ()
+
+
+@dataclass(frozen=True)
 class Run:
     """Everything the report says about one run (one payload profile and encoding).
 
@@ -367,6 +398,8 @@ class Run:
     stage_values: Mapping[str, Mapping[str, list[float]]] = field(
         default_factory=dict, metadata=JSON_NONE
     )
+    # `--link`: the IMU and LIDAR read ashore through an emulated link (clients.report.shore)
+    shore_link: ShoreLink | None = field(default=None, metadata=OMIT_NONE)
 
     @property
     def label(self) -> str:

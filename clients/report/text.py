@@ -30,6 +30,8 @@ from clients.report.results import (
     ProcessSummary,
     RadarQuality,
     Run,
+    ShoreLink,
+    ShoreTopic,
     StageStats,
     ThesisRow,
     TopicSummary,
@@ -203,6 +205,8 @@ def render_run(run: Run) -> str:
         lines += _closed_loop_lines(run.closed_loop)
     if run.mission is not None:
         lines += _mission_lines(run.mission)
+    if run.shore_link is not None:
+        lines += _shore_lines(run.shore_link)
     return "\n".join(lines)
 
 
@@ -242,6 +246,38 @@ def _closed_loop_lines(loop: ClosedLoop) -> list[str]:
         f"{fmt_ms(loop.control_jitter_ms)} ms"
     )
     return lines
+
+
+class ShoreLine(NamedTuple):
+    mode: str
+    topic: ShoreTopic
+    points_kept_p50: float | None
+
+
+SHORE_COLUMNS: list[Column[ShoreLine]] = [
+    text_column("mode", "mode"),
+    text_column("topic", "topic.topic"),
+    Column("rate", "topic.per_s", fmt_float1, "/s"),
+    Column("delivered", "topic.delivered_share", fmt_fraction),
+    Column("age p50", "topic.age_p50_ms", fmt_ms, "ms"),
+    Column("age p99", "topic.age_p99_ms", fmt_ms, "ms"),
+    Column("points", "points_kept_p50", fmt_float1),
+]
+
+
+def _shore_lines(shore: ShoreLink) -> list[str]:
+    """The IMU and LIDAR as shore clients got them through the emulated link, per mode."""
+    rows = [
+        ShoreLine(mode.mode, topic, mode.points_kept_p50 if topic is mode.lidar else None)
+        for mode in shore.modes
+        for topic in (mode.imu, mode.lidar)
+    ]
+    options = "; ".join(f"{mode.mode} {mode.options}" for mode in shore.modes)
+    return [
+        f"  ashore over the emulated {shore.profile} link, one client per mode on a link of its"
+        f" own (docs/bridge.md 'Over a thin link'); scan options: {options}",
+        *render_table(SHORE_COLUMNS, rows),
+    ]
 
 
 def _mission_lines(mission: Mission) -> list[str]:

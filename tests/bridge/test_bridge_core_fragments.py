@@ -89,3 +89,14 @@ def test_reassembled_garbage_is_logged_not_fatal(harness):
     harness.send(client, {"op": "fragment", "id": 7, "num": 1, "total": 2, "data": "!!"})
     harness.send(client, {"op": "call_service", "service": "/rosapi/nodes", "id": 1})
     assert harness.outbox(client)[0]["result"] is True
+
+
+def test_binary_fragments_from_a_client_are_refused_with_a_clear_line(harness, caplog):
+    """The bridge sends CBOR fragments on request; it takes only text ones (a JSON op)."""
+    from schemas import codec_cbor
+
+    caller = harness.connect()
+    fragment = {"op": "fragment", "id": "b", "num": 0, "total": 2, "data": b"\xa1"}
+    harness.send(caller, codec_cbor.dumps(fragment))
+    assert harness.state.sessions[caller].fragments == {}
+    assert "fragment data must be text" in caplog.text

@@ -81,3 +81,55 @@ def test_a_busy_stream_is_skipped_and_keeps_its_place():
 def test_limit_must_be_positive():
     with pytest.raises(ValueError):
         SendQueue(0)
+
+
+# -- freshness (docs/bridge.md, "Over a thin link") ------------------------------------------
+
+
+def kept(label: str, topic: str, keep: int) -> Send:
+    return Send(1, ControlMessage({"op": "x", "id": label}), topic, keep=keep)
+
+
+def test_queue_length_keeps_only_the_newest_waiting_counted_as_conflated():
+    queue = SendQueue(10_000)
+    assert queue.push(kept("a1", "/a", 1), 100) == []
+    dropped = queue.push(kept("a2", "/a", 1), 100)
+    assert [d.item.payload["id"] for d in dropped] == ["a1"]
+    queue.push(kept("b1", "/b", 2), 100)
+    queue.push(kept("b2", "/b", 2), 100)
+    queue.push(kept("b3", "/b", 2), 100)
+    assert labels(queue) == ["a2", "b2", "b3"]
+    assert queue.conflated == {"/a": 1, "/b": 1} and not queue.dropped
+
+
+def test_a_partly_sent_message_is_never_conflated_and_its_rest_goes_last_in_line():
+    queue = SendQueue(10_000)
+    queue.push(kept("scan1", "/scan", 1), 3000)
+    scan = queue.pop()
+    assert scan is not None
+    queue.push(item("imu1", "/imu"), 100)
+    queue.requeue(scan, 1000)  # one fragment left; the IMU sample queued meanwhile goes first
+    queue.push(kept("scan2", "/scan", 1), 3000)  # waits behind scan1's rest, drops nothing
+    queue.push(kept("scan3", "/scan", 1), 3000)  # replaces scan2, never scan1's rest
+    assert queue.conflated == {"/scan": 1}
+    assert labels(queue) == ["imu1", "scan1", "scan3"]
+
+
+def test_small_items_go_before_large_ones_and_each_stream_keeps_its_order():
+    queue = SendQueue(10_000_000)
+    queue.push(item("big1", "/scan"), 500_000)
+    queue.push(item("imu1", "/imu"), 200)
+    queue.push(item("big2", "/scan"), 500_000)
+    queue.push(item("answer", None), 300)
+    queue.push(item("imu2", "/imu"), 200)
+    assert labels(queue) == ["imu1", "answer", "imu2", "big1", "big2"]
+
+
+def test_only_lossless_items_count_towards_pacing_publishers():
+    queue = SendQueue(10_000)
+    queue.push(kept("scan", "/scan", 1), 3000)
+    queue.push(item("imu", "/imu"), 100)
+    assert queue.bytes == 3100 and queue.lossless_bytes == 100
+    queue.pop()
+    queue.pop()
+    assert queue.bytes == queue.lossless_bytes == 0

@@ -161,3 +161,20 @@ async def test_latest_only_counts_sends_lost_to_a_closed_link():
     await pub.publish({"n": 1})
     await pub.flush()
     assert pub.stats.dropped_disconnected == 1 and pub.stats.sent == 0
+
+
+def test_binary_fragments_interleaved_with_others_join_into_the_cbor_frame():
+    """riverbridge's CBOR fragments (docs/bridge.md, "Over a thin link"): byte slices of one
+    CBOR frame, pieces of two messages interleaved, joined per id."""
+    from clients.fragments import FragmentAssembler
+    from schemas.ops import Fragment
+
+    assembler = FragmentAssembler()
+    first, second = b"\xa1\x61a\x01" * 3, b"\xa1\x61b\x02" * 2
+    pieces = [("f:1", first[:5], 0, 3), ("f:2", second[:4], 0, 2), ("f:1", first[5:10], 1, 3)]
+    for key, data, num, total in pieces:
+        assert assembler.add(Fragment(id=key, data=data, num=num, total=total), 10) is None
+    done = assembler.add(Fragment(id="f:2", data=second[4:], num=1, total=2), 10)
+    assert done is not None and done.text == second
+    done = assembler.add(Fragment(id="f:1", data=first[10:], num=2, total=3), 10)
+    assert done is not None and done.text == first and done.wire_bytes == 30

@@ -159,6 +159,8 @@ def test_topic_list_names_topics_types_rates_and_clients(seen: dict[str, Any]) -
     assert "LIDAR scan, sensor frame · simulator · sensor" in seen["topics_titles"]
     assert "LIDAR obstacle boxes · navigation · output" in seen["topics_titles"]
     assert "expected, not published" not in text
+    # each client's link from the bridge's /metrics (docs/bridge.md, "Over a thin link")
+    assert "links (bridge /metrics)" in text and "RTT" in text, text
 
 
 def test_restart_counts_of_up_are_shown(seen: dict[str, Any]) -> None:

@@ -173,9 +173,13 @@ def test_pairs_need_the_same_stamp_and_no_pairs_give_no_figure():
     ]
 
 
-def sense(profile: str, poses_after_start: list | None = None) -> tuple[list, list]:
+def sense(
+    profile: str, poses_after_start: list | None = None, reduce_voxel_m: float | None = None
+) -> tuple[list, list]:
     """(lidar pairs, radar pairs) of (truth, navigation output) from the real simulator and
-    navigation cores (no sockets) on the default scene, at the start pose and `poses`."""
+    navigation cores (no sockets) on the default scene, at the start pose and `poses`; with
+    `reduce_voxel_m`, navigation reads each scan as the bridge's `reduce` thins it."""
+    from bridge.reduction import CloudReducer
     from navigation.config import LidarConfig as NavLidar
     from navigation.config import NavigationConfig
     from navigation.lidar_worker import ThreadLidarWorker
@@ -195,7 +199,10 @@ def sense(profile: str, poses_after_start: list | None = None) -> tuple[list, li
         for k, pose in enumerate([scene.start_pose, *(poses_after_start or [])]):
             stamp = (k + 1) * 10**9
             scan = lidar.scan_with_sources(scene, pose)
-            [(_, boxes), _] = nav.lidar(lidar.message(scan.points, stamp)).outputs
+            cloud = lidar.message(scan.points, stamp)
+            if reduce_voxel_m is not None:
+                cloud, _ = CloudReducer(cloud).reduced(reduce_voxel_m)
+            [(_, boxes), _] = nav.lidar(cloud).outputs
             lidar_pairs.append((lidar_truth(scene, cfg.lidar, pose, scan.source, stamp), boxes))
             sweep = radar.sweep_with_sources(scene, pose)
             [(_, detections)] = nav.radar(radar.message(sweep.image, stamp)).outputs
@@ -313,3 +320,22 @@ def test_navigation_meets_the_on_water_targets_on_the_default_scene(profile):
     assert radar_q.on_open_water == 0
     # the banks: every tree and house the sensors see well is found
     assert lidar_q.bank.recall >= 0.8 and radar_q.bank.recall >= 0.8
+
+
+def test_navigation_detects_as_well_from_a_cloud_reduced_at_its_own_voxel_size():
+    """A client asking `reduce: {"voxel_size": 0.2}` (navigation's own `voxel_size_m`) gets a
+    cloud from which navigation finds the same objects as from the full one: precision and
+    recall of both classes unchanged (docs/bridge.md, "Over a thin link")."""
+    from navigation.config import LidarConfig
+    from simulator.frames import Pose2D
+
+    voxel_m = LidarConfig().voxel_size_m
+    assert voxel_m == 0.2
+    more = [Pose2D(25.0, -690.0, 1.5)]
+    full, _ = sense("default", more)
+    reduced, _ = sense("default", more, reduce_voxel_m=voxel_m)
+    before, after = lidar_quality(full), lidar_quality(reduced)
+    for kind in ("on_water", "bank"):
+        was, now = getattr(before, kind), getattr(after, kind)
+        assert (now.precision, now.recall) == (was.precision, was.recall), (kind, was, now)
+    assert shortfalls(after) == []

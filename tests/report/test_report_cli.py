@@ -32,6 +32,7 @@ STAGES = (*JOURNEY_STAGES, TRANSPORT, "result")
         (["--bridge", "localhost:9090"], "--bridge"),
         (["--sim-config", "/no/such.toml"], "--sim-config"),
         (["--profile", "fast"], "--profile"),
+        (["--link", "5g"], "--link"),
     ],
 )
 def test_bad_options_name_the_option_and_exit_2(argv, option, capsys):

@@ -19,8 +19,9 @@ import { ArrivalAges, TraceStats } from "./trace.js";
 
 // The page subscribes to every catalogue topic whose consumers include "dashboard" (names and
 // types from the catalogue), at most as often as THROTTLE_MS (catalogue key -> throttle_rate,
-// ms) allows. queue_length 1 makes the bridge drop stale messages for a slow page instead of
-// queueing. The LIDAR's 2.9 MB scans are decoded and decimated in a worker (LIDAR).
+// ms) allows. queue_length 1 makes the bridge drop stale messages for a slow page or a thin
+// link instead of queueing (not for the IMU: every sample). The LIDAR's 2.9 MB scans, thinned
+// by the bridge to what the worker's link carries, are decoded and decimated in a worker.
 const THROTTLE_MS = { radar: 250, camera: 100, imu: 10, odom: 50, tf_static: 0, boxes: 100,
   radar_detections: 100, lines: 100, obstacle_map: 250, trace: 0, process_stats: 0, restarts: 0,
   guidance_path: 0, guidance_mode: 0 };
@@ -65,7 +66,10 @@ function startDashboard() {
   for (const { key, name, type } of SUBSCRIPTIONS) {
     const handle = handlers[key];
     if (!handle || !(key in THROTTLE_MS)) throw new Error(`no handler or throttle for ${name}`);
-    const options = { compression: "cbor", throttle_rate: THROTTLE_MS[key], queue_length: 1 };
+    // every IMU sample (it is small and frequent: the bridge sends it first on a thin link);
+    // the newest only of everything else
+    const queueLength = key === "imu" ? 0 : 1;
+    const options = { compression: "cbor", throttle_rate: THROTTLE_MS[key], queue_length: queueLength };
     connection.subscribe(name, type, options, (message) => received(name, (now) => {
       if (AGED_TOPICS.has(name)) ages.record(name, Date.now() - stampMs(message.header));
       handle(message, now);
@@ -78,6 +82,7 @@ function startDashboard() {
     }
     received(LIDAR.topic, () => {
       ages.record(LIDAR.topic, cloud.ageMs); // capture -> decoded in the worker
+      panels.topics.onScanReduced(cloud.reduced);
       const inWorker = `${LIDAR.topic} (worker: decimate + plot)`; // off the main thread
       handlerWorstMs[inWorker] = Math.max(handlerWorstMs[inWorker] ?? 0, cloud.workMs);
       if (cloud.bitmap) panels.map.onPointsImage(cloud.bitmap, cloud.pointCount);

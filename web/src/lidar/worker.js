@@ -7,9 +7,10 @@
 //                 {type: "view", view}   (see PointRaster; re-plots the last scan)
 // worker -> page: {type: "state", connected}
 //                 {type: "cloud", bitmap: ImageBitmap | null (no view yet), pointCount,
-//                  sourcePoints, frameId, stampMs, ageMs, workMs, replot (true: an old scan
+//                  sourcePoints, frameId, stampMs, ageMs, reduced (the bridge's note, or
+//                  null), workMs, replot (true: an old scan
 //                  drawn again for a new view, not a new message)}
-import { Ros, Topic } from "roslib";
+import { Ros } from "roslib";
 import { decimateCloud } from "../pointcloud.js";
 import { bytesOf, stampMs } from "../rosmsg.js";
 import { PointRaster } from "./raster.js";
@@ -19,6 +20,7 @@ const RECONNECT_DELAY_MS = 1000;
 const raster = new PointRaster();
 let view = null;
 let lastScan = null; // {points, frameId, sourcePoints, stampMs, ageMs}
+let reduced = null; // the bridge's `reduced` note on the last scan, if it thinned it
 
 self.onmessage = ({ data }) => {
   if (data?.type === "start") connect(data);
@@ -48,9 +50,16 @@ function connect(options) {
 
 function subscribe(ros, { topic, messageType, throttleMs, maxPoints }) {
   // queue_length 1: the bridge drops a stale scan rather than queueing it behind a slow worker
-  const subscription = new Topic({ ros, name: topic, messageType, compression: "cbor",
-    throttle_rate: throttleMs, queue_length: 1 });
-  subscription.subscribe((cloud) => {
+  // or a thin link; reduce "auto": it thins the scan to what this connection's link carries
+  // (docs/bridge.md, "Over a thin link"). roslibjs's Topic sends neither `reduce` nor more
+  // than its own fields, so the subscribe op goes out as it is and the scans are read off the
+  // connection's per-topic events (the whole publish op, with the bridge's `reduced` note).
+  ros.callOnConnection({ op: "subscribe", id: `dashboard-lidar-${Date.now()}`, topic,
+    type: messageType, compression: "cbor", throttle_rate: throttleMs, queue_length: 1,
+    reduce: { point_budget: "auto" } });
+  ros.on(topic, (op) => {
+    const cloud = op.msg;
+    reduced = op.reduced ?? null;
     const started = performance.now(); // roslib has decoded the CBOR by now
     lastScan = {
       points: decimateCloud(cloud, bytesOf(cloud.data), maxPoints),
@@ -68,5 +77,5 @@ async function post(scan, started, replot) {
   const bitmap = view ? await createImageBitmap(raster.render(scan.points, scan.frameId, view)) : null;
   const { points, ...about } = scan;
   self.postMessage({ type: "cloud", bitmap, pointCount: points.length / 3,
-    ...about, workMs: performance.now() - started, replot }, bitmap ? [bitmap] : []);
+    ...about, reduced, workMs: performance.now() - started, replot }, bitmap ? [bitmap] : []);
 }

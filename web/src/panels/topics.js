@@ -2,8 +2,10 @@
 // catalogue (schemas/catalogue.py) says of them; the stack's streams nobody publishes; the
 // connected clients (rosapi `topics`, `nodes`); each process's CPU, memory and drops
 // (/riverbridge/process_stats) and how often `riverbridge up` restarted each component
-// (/riverbridge/restarts).
+// (/riverbridge/restarts); and each client's link: goodput, round trip, unsent bytes, and the
+// messages conflated, dropped or reduced per topic (the bridge's /metrics).
 import { BY_NAME, EXPECTED_TOPICS } from "../catalogue.js";
+import { fetchLinkHealth } from "../linkhealth.js";
 
 const POLL_MS = 2000;
 const MIB = 1024 * 1024;
@@ -19,6 +21,13 @@ export class TopicsPanel {
     this.restarts = []; // [component, restarts, message] from the latest restarts report
     this.lastPollMs = -Infinity;
     this.polling = false;
+    this.link = null; // parseLinkMetrics of the bridge's /metrics
+    this.scan = null; // what the bridge said it did to the last scan ({voxel_size_m, ...})
+  }
+
+  /** The bridge's word on the last scan the page got (the `reduced` field of its publish). */
+  onScanReduced(reduced) {
+    this.scan = reduced;
   }
 
   onProcessStats(message) {
@@ -39,10 +48,12 @@ export class TopicsPanel {
     Promise.all([
       this.connection.call("/rosapi/topics", "rosapi_msgs/srv/Topics", {}),
       this.connection.call("/rosapi/nodes", "rosapi_msgs/srv/Nodes", {}),
+      fetchLinkHealth(this.connection.url),
     ])
-      .then(([topics, nodes]) => {
+      .then(([topics, nodes, link]) => {
         this.topics = topics.topics.map((name, i) => [name, topics.types[i]]);
         this.nodes = nodes.nodes;
+        this.link = link;
         this.#render(performance.now());
       })
       .catch(() => {})
@@ -88,7 +99,35 @@ export class TopicsPanel {
           `<td class="num restarts">${count}</td><td>${esc(message)}</td></tr>`);
       }
     }
+    rows.push(...this.#linkRows());
     this.element.innerHTML = `<table id="topics-table">${rows.join("")}</table>`;
+  }
+
+  #linkRows() {
+    const rows = [];
+    if (this.link && this.link.clients.size > 0) {
+      rows.push("<tr class=\"section\"><td colspan=\"3\">links (bridge /metrics)</td></tr>");
+      rows.push("<tr><th>client</th><th class=\"num\">goodput</th><th>RTT · unsent</th></tr>");
+      for (const [name, c] of this.link.clients) {
+        const goodput = c.goodputBytesPerS === undefined ? "—"
+          : `${(c.goodputBytesPerS * 8 / 1e6).toFixed(1)} Mbit/s`;
+        const rtt = c.rttS ? `${(c.rttS * 1000).toFixed(0)} ms` : "—";
+        rows.push(`<tr class="link-client"><td>${esc(name)}</td><td class="num">${goodput}</td>` +
+          `<td>RTT ${rtt} · ${((c.unsentBytes ?? 0) / 1024).toFixed(0)} KiB unsent</td></tr>`);
+      }
+      const lossy = [...this.link.topics.values()].filter((t) => t.conflated || t.dropped || t.reduced);
+      for (const t of lossy) {
+        rows.push(`<tr class="link-topic"><td>${esc(t.topic)} → ${esc(t.subscriber)}</td>` +
+          `<td class="num">${t.conflated}</td><td>conflated · ${t.dropped} dropped · ` +
+          `${t.reduced} reduced</td></tr>`);
+      }
+    }
+    if (this.scan) {
+      const s = this.scan;
+      rows.push(`<tr class="link-scan"><td colspan="3">scan reduced to fit the link: voxel ` +
+        `${Number(s.voxel_size_m).toFixed(2)} m, ${s.points_kept} of ${s.points_in} points</td></tr>`);
+    }
+    return rows;
   }
 }
 
