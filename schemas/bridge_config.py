@@ -301,10 +301,15 @@ class BridgeConfig(BaseModel):
         ),
     ] = None
     # Jazzy and later put the RIHS01 type hash in keys and tokens, Humble TypeHashNotSupported.
+    # None = the distribution the bridge acts as (`--ros-distro`), so one flag pins both graphs.
     zenoh_distro: Annotated[
-        Literal["humble", "jazzy", "kilted", "rolling"],
-        Option("--zenoh-distro", ZENOH, "the ROS 2 distribution whose rmw_zenoh keys to use"),
-    ] = "jazzy"
+        Literal["humble", "jazzy", "kilted", "rolling"] | None,
+        Option(
+            "--zenoh-distro",
+            ZENOH,
+            "the ROS 2 distribution whose rmw_zenoh keys to use (default: --ros-distro's)",
+        ),
+    ] = None
     # Access control (bridge.access, docs/bridge.md "Security and hostile input").
     # rosauth secret (first line of --auth-secret-file); None = no authentication, as ROS 2
     # rosbridge. With it, every op before a valid `auth` op is refused (protocol §1.5).
@@ -427,6 +432,10 @@ class BridgeConfig(BaseModel):
         """Whether a websocket client must authenticate before anything else."""
         unauthenticated = self.roles.unauthenticated_role if self.roles is not None else None
         return self.auth_secret is not None and unauthenticated is None
+
+    def zenoh_keys_distro(self) -> Literal["humble", "jazzy", "kilted", "rolling"]:
+        """Whose rmw_zenoh keys the Zenoh graph uses: `--zenoh-distro`, else `--ros-distro`."""
+        return self.zenoh_distro or self.distro
 
     def action_patterns(self) -> tuple[str, ...]:
         """The globs actions must match: `actions_glob`, else `services_glob`."""

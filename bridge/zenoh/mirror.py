@@ -71,7 +71,8 @@ class ZenohMirror:
         except ValueError as exc:
             raise ZenohStartError(str(exc)) from exc
         self.session = session
-        self.node = ZenohNode(session, config.dds_domain, config.zenoh_distro, config.dds_node)
+        distro = config.zenoh_keys_distro()
+        self.node = ZenohNode(session, config.dds_domain, distro, config.dds_node)
         self.graph = ZenohGraph(config.dds_domain, self.node.zid)
         to_loop = loop.call_soon_threadsafe
         self.topics = ZenohTopics(
@@ -91,7 +92,7 @@ class ZenohMirror:
             config.dds_domain,
             self.node.fqn,
             self.node.zid,
-            config.zenoh_distro,
+            config.zenoh_keys_distro(),
             ", ".join(settings.listen) or "the default",
             ", ".join(settings.connect) or "the default",
         )

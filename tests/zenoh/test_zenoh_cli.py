@@ -34,6 +34,18 @@ def test_options_reach_the_config(tmp_path):
 
 
 @pytest.mark.parametrize(
+    ("argv", "keys"),
+    [
+        (["--zenoh"], "jazzy"),
+        (["--zenoh", "--ros-distro", "humble"], "humble"),
+        (["--zenoh", "--ros-distro", "humble", "--zenoh-distro", "kilted"], "kilted"),
+    ],
+)
+def test_the_zenoh_keys_follow_the_ros_distro_unless_told_otherwise(argv, keys):
+    assert config_from_args(build_parser().parse_args(argv)).zenoh_keys_distro() == keys
+
+
+@pytest.mark.parametrize(
     ("argv", "named"),
     [
         (["--zenoh", "--zenoh-listen", "not an endpoint"], "zenoh_listen"),
