@@ -173,7 +173,10 @@ class TypeRegistry:
         full = self._resolve_message_name(name)
         text = self._full_texts.get(full)
         if text is None:
-            text, _md5 = self.typestore.generate_msgdef(full, ros_version=2)
+            try:
+                text, _md5 = self.typestore.generate_msgdef(full, ros_version=2)
+            except AssertionError as exc:  # rosbags writes only `/msg/` types' (not actions')
+                raise UnknownTypeError(f"no definition text for {full}") from exc
             self._full_texts[full] = text
         return text
 

@@ -20,9 +20,12 @@ from bridge.foxglove import wire
 from bridge.foxglove.assets import AssetDirectory
 from bridge.foxglove.channels import ChannelTable, published_topics
 from bridge.foxglove.graph_view import connection_graph, graph_changes
+from bridge.foxglove.node_parameters import parameter_nodes, service_nodes, split_name
+from bridge.foxglove.param_calls import NodeParameterCalls, Outcome
 from bridge.foxglove.playback import STATE_TOPIC, PlaybackWatch
-from bridge.foxglove.session import FoxgloveSession, Permit, allow_all
+from bridge.foxglove.session import FoxgloveSession, Permit, Reply, allow_all
 from bridge.host import PluginHost
+from bridge.outgoing import ControlMessage
 from bridge.problems import ProblemLog
 from schemas.roles_config import Action
 from schemas.safety import safe_text
@@ -113,6 +116,18 @@ class FoxglovePlugin:
             if names:
                 connection.send(connection.session.parameter_values(names, params, None))
 
+    def watched(self, name: str) -> bool:
+        """Whether a Foxglove client subscribed to updates of parameter `name`."""
+        return any(name in c.session.parameter_names for c in self.connections.values())
+
+    def tell_node_parameters(self, parameters: list[dict[str, Any]]) -> None:
+        """ROS 2 nodes' parameters a Foxglove client set: to the clients subscribed to them."""
+        for connection in list(self.connections.values()):
+            wanted = connection.session.parameter_names
+            chosen = [p for p in parameters if p["name"] in wanted]
+            if chosen:
+                connection.send(wire.json_frame("parameterValues", parameters=chosen))
+
     def broadcast(self, data: bytes, wanted: Any = None, drop_key: str | None = None) -> None:
         for connection in list(self.connections.values()):
             if wanted is None or wanted(connection):
@@ -152,6 +167,8 @@ class FoxgloveConnection:
         self.client_id = client_id
         self.session = FoxgloveSession(client_id, plugin.table, self.host.registry, self.permit)
         self.session.clock = plugin.playback.message_time
+        self.session.node_param = lambda name: split_name(name, self.host.graph.services)
+        self.node_calls = NodeParameterCalls(self.host, client_id)
         session = self.host.clients().get(client_id)
         self.node = session.node if session is not None else f"client {client_id}"
         self._problems = ProblemLog()  # bad input: logged per line up to a rate, then counted
@@ -200,7 +217,9 @@ class FoxgloveConnection:
             self.send(frame)
         for op in reply.ops:
             self.host.send_op(self.client_id, op)
-        if reply.parameters_after is not None:
+        if reply.node_sets or self._asks_nodes(reply):
+            self.host.spawn(self._node_parameters(reply), "foxglove node parameters")
+        elif reply.parameters_after is not None:
             names, request_id = reply.parameters_after
             self.send(self.session.parameter_values(names, self.host.parameters(), request_id))
         if reply.asset is not None:
@@ -211,11 +230,53 @@ class FoxgloveConnection:
             self.session.graph_sent = True
             self.send(graph_changes({}, self.plugin.graph) or b"")
 
+    def _asks_nodes(self, reply: Reply) -> bool:
+        """Whether the parameters to send back include ROS 2 nodes' (all of them: none named)."""
+        if reply.parameters_after is None:
+            return False
+        names = reply.parameters_after[0]
+        if not names:
+            return bool(self._parameter_nodes())
+        return any(self.session.node_param(name) is not None for name in names)
+
+    def _parameter_nodes(self) -> list[str]:
+        services = self.host.graph.services
+        return parameter_nodes(services, service_nodes(services))
+
+    async def _node_parameters(self, reply: Reply) -> None:
+        """Set ROS 2 nodes' parameters, then answer with the values asked for (nodes' read
+        afresh); a node that fails or does not answer in time is a status, not a stall."""
+        taken, problems = await self.node_calls.set(reply.node_sets)
+        watched = [n for n in taken if self.plugin.watched(n)]
+        if watched:
+            named = [self.session.node_param(name) for name in watched]
+            now = await self.node_calls.get([pair for pair in named if pair is not None])
+            self.plugin.tell_node_parameters(now.parameters)
+        if reply.parameters_after is not None:
+            names, request_id = reply.parameters_after
+            outcome = await self._read_parameters(names)
+            problems += outcome.problems
+            own = [n for n in names if self.session.node_param(n) is None]
+            params = self.host.parameters() if own or not names else {}
+            self.send(self.session.parameter_values(own, params, request_id, outcome.parameters))
+        for problem in problems:
+            self._log_problem("parameters", problem)
+            self.send(wire.status(wire.ERROR, problem))
+
+    async def _read_parameters(self, names: list[str]) -> Outcome:
+        """The ROS 2 nodes' parameters among `names`; every node's when `names` is empty."""
+        if not names:
+            return await self.node_calls.get_all(self._parameter_nodes())
+        named = [self.session.node_param(name) for name in names]
+        return await self.node_calls.get([pair for pair in named if pair is not None])
+
     async def _fetch(self, request: wire.FetchAsset) -> None:
         """Read the asset on a worker thread (a terrain mesh may be megabytes)."""
         self.send(await asyncio.to_thread(self.plugin.assets.answer, request))
 
     def outgoing(self, send: Send) -> list[Send]:
+        if isinstance(send.item, ControlMessage) and self.node_calls.answered(send.item.payload):
+            return []
         return self.session.outgoing(send)
 
     def _log_problem(self, op: str, problem: str) -> None:
@@ -228,6 +289,7 @@ class FoxgloveConnection:
             logger.warning("[%s] Foxglove op=%s: %s", self.node, safe_text(op, 60), problem)
 
     def close(self) -> None:
+        self.node_calls.close()
         self.plugin.connections.pop(self.client_id, None)
         summary = self._problems.summary(self.node, self.host.now_ns(), "Foxglove problems")
         if summary is not None:

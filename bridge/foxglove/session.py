@@ -21,13 +21,14 @@ import orjson
 from bridge.effects import Send
 from bridge.foxglove import wire
 from bridge.foxglove.channels import CDR, ChannelTable
+from bridge.foxglove.node_parameters import to_ros
 from bridge.outgoing import CBOR_RAW, ControlMessage, Delivery, RawFrame, WireFrame
 from schemas.codec_cdr import from_cdr, to_cdr
 from schemas.errors import SchemaError
 from schemas.message import normalize
 from schemas.registry import TypeRegistry
 from schemas.safety import echo
-from schemas.values import JsonObject
+from schemas.values import JsonObject, Message
 
 JSON = "json"
 PLAYBACK_SERVICE = "/riverbridge/playback/control"
@@ -65,6 +66,8 @@ class Reply:
     ops: list[JsonObject] = field(default_factory=list)
     asset: wire.FetchAsset | None = None
     parameters_after: tuple[list[str], str | None] | None = None
+    # ROS 2 nodes' parameters to set first (node, parameter, ParameterValue), by the shell.
+    node_sets: list[tuple[str, str, Message]] = field(default_factory=list)
     op: str = "?"  # the op or binary opcode of the frame, for log lines
     problems: list[str] = field(default_factory=list)  # what its statuses say
 
@@ -92,6 +95,9 @@ class FoxgloveSession:
         # A message's timestamp from when it entered the bridge (the playback clock, if any).
         self.clock: Callable[[int], int] = lambda received_ns: received_ns
         self.calls: dict[str, tuple[int, int, str]] = {}  # op id -> service, call, encoding
+        # `/node.param` -> (node, param) when it is a ROS 2 node's parameter, else None
+        # (the shell knows the graph: `bridge.foxglove.node_parameters.split_name`).
+        self.node_param: Callable[[str], tuple[str, str] | None] = lambda name: None
 
     # -- inbound ------------------------------------------------------------------------------
 
@@ -229,6 +235,14 @@ class FoxgloveSession:
         names = [parameter.name for parameter in op.parameters]
         for parameter in op.parameters:
             if self._refusal(reply, "set_param", parameter.name):
+                continue
+            named = self.node_param(parameter.name)
+            if named is not None:
+                try:
+                    reply.node_sets.append((*named, to_ros(parameter)))
+                except ValueError as exc:
+                    problem = f"setting {echo(parameter.name, 80)} failed: {exc}"
+                    reply.frames.append(wire.status(wire.ERROR, problem))
                 continue
             reply.ops.append(
                 {
@@ -386,13 +400,18 @@ class FoxgloveSession:
         )
 
     def parameter_values(
-        self, names: list[str], params: Mapping[str, str], request_id: str | None
+        self,
+        names: list[str],
+        params: Mapping[str, str],
+        request_id: str | None,
+        nodes: list[dict[str, Any]] | None = None,
     ) -> bytes:
-        """`parameterValues` for `names` (every parameter when empty); unknown ones left out."""
+        """`parameterValues` for `names` (every parameter when empty); unknown ones left out.
+        `nodes`: ROS 2 nodes' parameters already in Foxglove's shape, sent after the own."""
         chosen = names or sorted(params)
         values = [
             {"name": name, "value": orjson.loads(params[name])} for name in chosen if name in params
-        ]
+        ] + (nodes or [])
         fields: dict[str, Any] = {"parameters": values}
         if request_id is not None:
             fields["id"] = request_id

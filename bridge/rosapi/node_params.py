@@ -68,7 +68,7 @@ def parameter_value(text: str) -> Message:
         plain = codec_json.loads(text.encode())
     except DecodeError as exc:
         raise RosapiError(f"value {text!r} is not JSON text: {exc}") from exc
-    kind = _kind_of(plain)
+    kind = kind_of(plain)
     if kind is None:
         raise RosapiError(f"a ROS 2 parameter cannot hold {text!r}")
     return {"type": kind, VALUE_FIELDS[kind]: plain}
@@ -133,7 +133,8 @@ def _plain(value: Any) -> Any:
     return tolist() if tolist is not None else value
 
 
-def _kind_of(plain: Any) -> int | None:
+def kind_of(plain: Any) -> int | None:
+    """The ParameterType a JSON value holds (rosapi's rule; None if no ROS 2 type can)."""
     scalar = _scalar_kind(plain)
     if scalar is not None:
         return scalar

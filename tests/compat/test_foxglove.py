@@ -21,6 +21,7 @@ from .bridge_process import BridgeEndpoint, running_bridge
 from .conftest import assert_bridge_survived
 from .messages import STAMP_NANOSEC, STAMP_SEC, imu
 from .node_runner import run_scenario
+from .wire import wait_until_listed, wire_peer
 
 IMU_TOPIC = "/compat/fg_imu"
 WRENCH_TOPIC = "/compat/fg_wrench"
@@ -132,3 +133,39 @@ async def test_foxglove_client_and_roslibpy_share_the_graph(
     assert result["assetOk"] == {"status": 0, "text": MESH}
     assert result["assetRefused"]["status"] == 1
     assert "package://" in result["assetRefused"]["error"]
+
+
+async def test_foxglove_parameters_of_a_node_that_does_not_answer() -> None:
+    """`/silent.x` is a node's parameter (its `get_parameters` is in the graph) whose
+    services never answer: the Foxglove client gets its reply without it after the bridge's
+    call timeout and a status naming the failure, for the get and the set; a value no ROS 2
+    parameter can hold is refused at once. The bridge keeps serving."""
+    with running_bridge(["--call-timeout", "1"]) as bridge:
+        async with wire_peer(bridge.url) as silent:
+            for service in ("get_parameters", "set_parameters"):
+                await silent.send(
+                    {
+                        "op": "advertise_service",
+                        "service": f"/silent/{service}",
+                        "type": f"rcl_interfaces/srv/{service.title().replace('_', '')}",
+                    }
+                )
+            await wait_until_listed(
+                silent, "/rosapi/services", "services", "/silent/set_parameters"
+            )
+            result = await asyncio.to_thread(
+                run_scenario, "foxglove_params.mjs", bridge.url, "-", "/silent"
+            )
+            asked = [
+                r.message["service"] for r in silent.history if r.message["op"] == "call_service"
+            ]
+        assert_bridge_survived(bridge)
+    assert result["getSilent"] == []
+    assert sorted(asked) == ["/silent/get_parameters", "/silent/set_parameters"]
+    statuses = sorted(result["statuses"])
+    assert statuses[0].startswith("getting /silent.x failed: Service /silent/get_parameters")
+    assert "timed out after 1 s" in statuses[0]
+    assert statuses[1].startswith("setting '/silent.y' failed: a ROS 2 parameter cannot hold")
+    assert statuses[2] == (
+        "setting /silent.x failed: Service /silent/set_parameters call timed out after 1 s"
+    )

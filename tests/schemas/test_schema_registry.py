@@ -229,3 +229,12 @@ def test_messages_without_fields_have_no_fields(registry):
     assert empty == {}
     cdr = to_cdr(registry, "std_msgs/msg/Empty", empty)
     assert from_cdr(registry, "std_msgs/msg/Empty", cdr) == {}
+
+
+def test_action_parts_without_definition_text_are_a_schema_error(registry):
+    """rosbags writes definition text for `/msg/` types only: an action's feedback message
+    (a DDS topic Foxglove would show) is an UnknownTypeError, not an AssertionError that
+    took down a Foxglove client's handshake."""
+    with pytest.raises(UnknownTypeError, match="no definition text"):
+        registry.full_text("test_msgs/action/Fibonacci_FeedbackMessage")
+    assert "MSG: std_msgs/Header" in registry.full_text("sensor_msgs/msg/Imu")

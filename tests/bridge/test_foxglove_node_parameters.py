@@ -1,0 +1,80 @@
+"""ROS 2 nodes' parameters in Foxglove's shape (bridge.foxglove.node_parameters): names as
+foxglove_bridge splits them, values both ways, a SetParameters answer read per parameter."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from bridge.foxglove import wire
+from bridge.foxglove.node_parameters import (
+    parameter_nodes,
+    service_nodes,
+    set_failures,
+    split_name,
+    to_foxglove,
+    to_ros,
+)
+
+SERVICES = {"/talker/get_parameters", "/talker/list_parameters", "/ns/cam/get_parameters"}
+
+
+def test_names_split_at_the_first_dot_when_the_node_serves_parameters() -> None:
+    assert split_name("/talker.gain", SERVICES) == ("/talker", "gain")
+    assert split_name("/talker.pid.kp", SERVICES) == ("/talker", "pid.kp")
+    assert split_name("/ns/cam.exposure", SERVICES) == ("/ns/cam", "exposure")
+    # The bridge's own: no such node, no dot, or not a node name.
+    for own in ("/other.gain", "/compat:answer", "talker.gain", "/talker.", ".gain"):
+        assert split_name(own, SERVICES) is None
+
+
+def test_nodes_that_list_and_get_their_parameters() -> None:
+    assert service_nodes(SERVICES) == {"/talker", "/ns/cam"}
+    assert parameter_nodes(SERVICES, service_nodes(SERVICES)) == ["/talker"]
+
+
+@pytest.mark.parametrize(
+    ("value", "expected"),
+    [
+        ({"type": 1, "bool_value": True}, {"value": True}),
+        ({"type": 2, "integer_value": 7}, {"value": 7}),
+        ({"type": 3, "double_value": 2.0}, {"value": 2.0, "type": "float64"}),
+        ({"type": 4, "string_value": "on"}, {"value": "on"}),
+        ({"type": 5, "byte_array_value": b"\x01\x02"}, {"value": "AQI=", "type": "byte_array"}),
+        ({"type": 7, "integer_array_value": np.array([1, 2])}, {"value": [1, 2]}),
+        (
+            {"type": 8, "double_array_value": np.array([0.5])},
+            {"value": [0.5], "type": "float64_array"},
+        ),
+        ({"type": 9, "string_array_value": ["a"]}, {"value": ["a"]}),
+    ],
+)
+def test_values_cross_to_foxglove_and_back(value: dict, expected: dict) -> None:
+    shown = to_foxglove("/talker", "p", value)
+    assert shown == {"name": "/talker.p", **expected}
+    back = to_ros(wire.Parameter.model_validate(shown))
+    field = next(k for k in value if k != "type")
+    assert back["type"] == value["type"]
+    assert np.array_equal(np.asarray(back[field]), np.asarray(value[field]))
+
+
+def test_not_set_and_unholdable_values() -> None:
+    assert to_foxglove("/talker", "p", {"type": 0}) is None
+    with pytest.raises(ValueError, match="cannot hold"):
+        to_ros(wire.Parameter(name="/talker.p", value={"no": "object"}))
+    with pytest.raises(ValueError, match="not base64"):
+        to_ros(wire.Parameter(name="/talker.p", value="%%", type="byte_array"))
+    assert to_ros(wire.Parameter(name="/talker.p", value=2, type="float64")) == {
+        "type": 3,
+        "double_value": 2.0,
+    }
+
+
+def test_set_answers_name_what_was_refused() -> None:
+    answer = {"results": [{"successful": True}, {"successful": False, "reason": "read-only"}]}
+    assert set_failures("/talker", ["a", "b"], answer) == [
+        ("b", "setting /talker.b failed: read-only")
+    ]
+    assert set_failures("/talker", ["a"], "timed out") == [
+        ("a", "setting /talker.a failed: timed out")
+    ]
