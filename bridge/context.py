@@ -39,6 +39,17 @@ class PendingCall:
     timeout_s: float
     # A rosapi call answered by another service: its response -> the rosapi response.
     translate: Callable[[Message], Message] | None = None
+    # One of the calls a rosapi call gathers answers from (`bridge.rosapi.common.Gather`).
+    gathering: Gathering | None = None
+    slot: int = 0
+
+
+@dataclass
+class Gathering:
+    """The answers a rosapi call waits for (None: not yet), combined once all are in."""
+
+    combine: Callable[[list[Message | str]], Message]
+    answers: list[Message | str | None]
 
 
 @dataclass

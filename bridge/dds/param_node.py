@@ -2,10 +2,12 @@
 
 The bridge keeps parameters for rosapi (`/rosapi/get_param`, `set_param`,
 `get_param_names`). Its DDS node (`/riverbridge_<id>` or `--dds-node`) offers them through
-rcl_interfaces' services, `<node>/list_parameters`, `get_parameters` and `set_parameters`,
-so ROS 2 tools (`ros2 param list/get/set`) reach them. Each DDS request becomes rosapi calls
-of an in-process client, and their answers make the reply; values cross as rosapi's JSON
-text (`bridge.rosapi.node_params`). A name the bridge does not keep is NOT_SET, as in ROS 2.
+rcl_interfaces' services, `<node>/list_parameters`, `get_parameters`, `set_parameters`,
+`describe_parameters` and `get_parameter_types`, so ROS 2 tools (`ros2 param
+list/get/set/describe`) reach them. Gets and sets become rosapi calls of an in-process
+client, and their answers make the reply; lists, descriptions and types are read from the
+bridge's parameters directly. Values cross as rosapi's JSON text
+(`bridge.rosapi.node_params`). A name the bridge does not keep is NOT_SET, as in ROS 2.
 """
 
 from __future__ import annotations
@@ -34,6 +36,8 @@ SERVICES = {
     "list_parameters": "rcl_interfaces/srv/ListParameters",
     "get_parameters": "rcl_interfaces/srv/GetParameters",
     "set_parameters": "rcl_interfaces/srv/SetParameters",
+    "describe_parameters": "rcl_interfaces/srv/DescribeParameters",
+    "get_parameter_types": "rcl_interfaces/srv/GetParameterTypes",
 }
 
 
@@ -64,11 +68,14 @@ class ParamNode:
         own_clients.add(self.client)  # the mirror's own: never a websocket client's node
         self._waiting: dict[str, _Request] = {}  # rosapi call id -> its DDS request
         self._value_spec = dds.registry.message(VALUE_TYPE)  # fills the unused fields
+        self._registry = dds.registry
         self._calls = 0
         handlers = {
             "list_parameters": self._list,
             "get_parameters": self._get,
             "set_parameters": self._set,
+            "describe_parameters": self._describe,
+            "get_parameter_types": self._types,
         }
         self.servers = [
             ServiceServer(
@@ -94,11 +101,29 @@ class ParamNode:
             pending.server.send(pending.request, pending.compose([]))
 
     def _list(self, _service: str, request: RequestId, msg: Message) -> None:
-        def compose(answers: list[Message]) -> Message:
-            names = answers[0].get("names", []) if answers else []
-            return {"result": {"names": list(names), "prefixes": []}}
+        # Its own names only, read directly: rosapi's get_param_names also asks other nodes
+        # (another bridge's node asking this one's would go round in a circle).
+        names = sorted(self._host.parameters())
+        self.servers[0].send(request, {"result": {"names": names, "prefixes": []}})
 
-        self._ask(_Request(self.servers[0], request, compose), [("/rosapi/get_param_names", {})])
+    def _describe(self, _service: str, request: RequestId, msg: Message) -> None:
+        names = [str(name) for name in msg.get("names", [])]
+        descriptors = [{"name": name, "type": self._type_of(name)} for name in names]
+        self._answer_now(3, {"descriptors": descriptors}, request)
+
+    def _types(self, _service: str, request: RequestId, msg: Message) -> None:
+        types = [self._type_of(str(name)) for name in msg.get("names", [])]
+        self._answer_now(4, {"types": types}, request)
+
+    def _type_of(self, name: str) -> int:
+        """The ParameterType of one of the bridge's parameters (NOT_SET if it has none)."""
+        text = self._host.parameters().get(name)
+        return int(_as_parameter_value({"successful": text is not None, "value": text})["type"])
+
+    def _answer_now(self, index: int, values: Message, request: RequestId) -> None:
+        server = self.servers[index]
+        spec = self._registry.service(list(SERVICES.values())[index]).response
+        server.send(request, normalize(spec, values, now_ns=0))
 
     def _get(self, _service: str, request: RequestId, msg: Message) -> None:
         names = [str(name) for name in msg.get("names", [])]

@@ -9,12 +9,12 @@ when the service is unknown, the call times out, or the provider unadvertises or
 
 from __future__ import annotations
 
-from bridge.context import Context, PendingCall
+from bridge.context import Context, Gathering, PendingCall
 from bridge.errors import BridgeError, OpFailure, RosapiError
 from bridge.graph import ServiceEntry
 from bridge.names import absolute_name, allowed
 from bridge.ops import route
-from bridge.rosapi.common import Forward, RosapiService
+from bridge.rosapi.common import Forward, Gather, RosapiService
 from bridge.session import ClientSession
 from schemas.errors import SchemaError
 from schemas.message import normalize
@@ -80,8 +80,8 @@ def answer_rosapi(ctx: Context, service: RosapiService, args: JsonValue) -> Mess
     )
 
 
-def forwarded(ctx: Context, service: RosapiService, args: JsonValue) -> Forward | None:
-    """Where a rosapi call is answered by another service (another node's parameters)."""
+def forwarded(ctx: Context, service: RosapiService, args: JsonValue) -> Forward | Gather | None:
+    """Where a rosapi call is answered by other services (other nodes' parameters)."""
     if service.forward is None:
         return None
     srv = ctx.state.registry.service(service.type_name)
@@ -110,33 +110,57 @@ def call(
     forward = forwarded(ctx, rosapi, op.args) if rosapi is not None else None
     if rosapi is not None and forward is None:
         return answer_rosapi(ctx, rosapi, op.args)
+    if isinstance(forward, Gather):
+        return gather(ctx, session, forward, op, call_id)
     if forward is not None:
-        name = forward.service
+        pending = PendingCall(
+            forward.service, 0, session.client_id, call_id, op.service, 0.0, forward.translate
+        )
+        send_call(ctx, pending, forward.args, op.timeout)
+        return None
+    pending = PendingCall(name, 0, session.client_id, call_id, op.service, 0.0)
+    send_call(ctx, pending, op.args, op.timeout)
+    return None
+
+
+def send_call(ctx: Context, pending: PendingCall, args: JsonValue, timeout: float | None) -> None:
+    """Call `pending.service`'s provider with `args` (OpFailure: not allowed, no provider);
+    its answer, or the timeout, settles `pending`."""
+    name = pending.service
     if not allowed(name, ctx.state.config.services_glob):
         raise OpFailure(f"Service {name} is not allowed by services_glob")
     entry = ctx.state.graph.services.get(name)
     provider = ctx.state.session_of_node(entry.provider) if entry else None
     if entry is None or provider is None:
         raise OpFailure(f"Service {name} does not exist")
-    args = request_fields(ctx, entry.type_name, forward.args if forward else op.args)
+    request = request_fields(ctx, entry.type_name, args)
     entry.requests_sent += 1
     request_id = f"service_request:{entry.spelling}:{entry.requests_sent}"
-    timeout_s = (
-        min(op.timeout, MAX_TIMEOUT_S)
-        if op.timeout and op.timeout > 0
-        else ctx.state.config.call_timeout_s
+    pending.provider = provider.client_id
+    pending.timeout_s = (
+        min(timeout, MAX_TIMEOUT_S) if timeout and timeout > 0 else ctx.state.config.call_timeout_s
     )
-    ctx.state.pending_calls[request_id] = PendingCall(
-        name,
-        provider.client_id,
-        session.client_id,
-        call_id,
-        op.service,
-        timeout_s,
-        forward.translate if forward else None,
-    )
-    ctx.send(provider.client_id, CallService(id=request_id, service=entry.spelling, args=args))
-    ctx.schedule(("call", request_id), ctx.now_ns + int(timeout_s * NS_PER_S))
+    ctx.state.pending_calls[request_id] = pending
+    ctx.send(provider.client_id, CallService(id=request_id, service=entry.spelling, args=request))
+    ctx.schedule(("call", request_id), ctx.now_ns + int(pending.timeout_s * NS_PER_S))
+
+
+def gather(
+    ctx: Context, session: ClientSession, wanted: Gather, op: CallService, call_id: OpId
+) -> Message | None:
+    """Make every call of `wanted` at once; the caller is answered when all are settled
+    (at once when there are none or all fail here)."""
+    if not wanted.calls:
+        return wanted.combine([])
+    gathering = Gathering(wanted.combine, [None] * len(wanted.calls))
+    for slot, (service, args) in enumerate(wanted.calls):
+        pending = PendingCall(
+            service, 0, session.client_id, call_id, op.service, 0.0, None, gathering, slot
+        )
+        try:
+            send_call(ctx, pending, args, op.timeout)
+        except (BridgeError, SchemaError) as exc:
+            finish(ctx, pending, str(exc), False)
     return None
 
 
@@ -209,7 +233,21 @@ def response_values(
 
 
 def finish(ctx: Context, pending: PendingCall, values: JsonValue, result: bool) -> None:
-    respond(ctx, pending.caller, pending.caller_service, pending.caller_id, values, result)
+    gathering = pending.gathering
+    if gathering is None:
+        respond(ctx, pending.caller, pending.caller_service, pending.caller_id, values, result)
+        return
+    gathering.answers[pending.slot] = values if result and isinstance(values, dict) else str(values)
+    answers = [a for a in gathering.answers if a is not None]
+    if len(answers) < len(gathering.answers):
+        return
+    try:
+        combined: JsonValue = gathering.combine(answers)
+    except RosapiError as exc:
+        combined, result = str(exc), False
+    else:
+        result = True
+    respond(ctx, pending.caller, pending.caller_service, pending.caller_id, combined, result)
 
 
 def fail_calls(ctx: Context, service: str, reason: str) -> None:

@@ -26,8 +26,18 @@ class Forward:
     translate: Callable[[Message], Message]
 
 
-#: `(ctx, request) -> Forward | None`: None answers the call with the handler as usual.
-Forwarder = Callable[[Context, Message], Forward | None]
+@dataclass(frozen=True)
+class Gather:
+    """Answer a rosapi call from several services' answers: each of `calls` (service, args)
+    is made at once, and `combine` gets every one's response values, or the text of its
+    failure (unknown service, timeout), in order. Used to list other nodes' parameters."""
+
+    calls: tuple[tuple[str, Message], ...]
+    combine: Callable[[list[Message | str]], Message]
+
+
+#: `(ctx, request) -> Forward | Gather | None`: None answers the call with the handler.
+Forwarder = Callable[[Context, Message], Forward | Gather | None]
 
 
 @dataclass(frozen=True)

@@ -7,6 +7,7 @@ that node's `rcl_interfaces` services. So does the bridge: `get_param`, `set_par
 websocket client that provides it), with the core's call timeout; the node's answer is
 translated back into the rosapi response. A node without those services in the graph keeps
 its parameters in the bridge, as every name did before (`bridge.rosapi.param_services`).
+`get_param_names` gathers every such node's `list_parameters` (`Gather`).
 Values are JSON text both ways, as rosapi's are. Pure: request in, `Forward` out; response
 in, rosapi values out.
 """
@@ -17,7 +18,7 @@ from typing import Any
 
 from bridge.context import Context
 from bridge.errors import RosapiError
-from bridge.rosapi.common import Forward
+from bridge.rosapi.common import Forward, Gather
 from schemas import codec_json
 from schemas.errors import DecodeError
 from schemas.values import Message
@@ -123,6 +124,32 @@ def forward_set_param(ctx: Context, request: Message) -> Forward | None:
 
     parameters = [{"name": param, "value": value}]
     return Forward(f"{node}/set_parameters", {"parameters": parameters}, translate)
+
+
+def gather_param_names(ctx: Context, request: Message) -> Gather | None:
+    """rosapi's `get_param_names` on ROS 2: the bridge's own names, then `node:param` of
+    every node whose `list_parameters` is in the graph (None: no such node, the handler
+    answers). A node that fails or does not answer in time is left out, as rosbridge does."""
+    suffix = "/list_parameters"
+    nodes = sorted(
+        name[: -len(suffix)]
+        for name in ctx.state.graph.services
+        if name.endswith(suffix) and len(name) > len(suffix)
+    )
+    if not nodes:
+        return None
+    own = sorted(ctx.state.params)
+
+    def combine(answers: list[Message | str]) -> Message:
+        names = list(own)
+        for node, answer in zip(nodes, answers, strict=True):
+            if isinstance(answer, dict):
+                listed = (answer.get("result") or {}).get("names") or []
+                names += [f"{node}:{name}" for name in listed]
+        return {"names": names}
+
+    calls = tuple((f"{node}{suffix}", {"prefixes": [], "depth": 0}) for node in nodes)
+    return Gather(calls, combine)
 
 
 def _plain(value: Any) -> Any:

@@ -11,7 +11,12 @@ from dataclasses import replace
 from bridge.context import Context
 from bridge.errors import RosapiError
 from bridge.rosapi.common import table, text_arg
-from bridge.rosapi.node_params import forward_get_param, forward_has_param, forward_set_param
+from bridge.rosapi.node_params import (
+    forward_get_param,
+    forward_has_param,
+    forward_set_param,
+    gather_param_names,
+)
 from schemas import codec_json
 from schemas.errors import DecodeError
 from schemas.safety import echo
@@ -91,5 +96,6 @@ for _name, _forward in (
     ("get_param", forward_get_param),
     ("set_param", forward_set_param),
     ("has_param", forward_has_param),
+    ("get_param_names", gather_param_names),
 ):
     SERVICES[f"{PREFIX}/{_name}"] = replace(SERVICES[f"{PREFIX}/{_name}"], forward=_forward)

@@ -117,3 +117,54 @@ def test_parameter_values_translate_both_ways():
     assert parameter_value("3") == {"type": 2, "integer_value": 3}
     assert parameter_value("[1, 2.5]") == {"type": 8, "double_array_value": [1, 2.5]}
     assert parameter_value('"x"') == {"type": 4, "string_value": "x"}
+
+
+def serve_list(harness, node: str) -> int:
+    provider = harness.connect()
+    harness.send(
+        provider,
+        {
+            "op": "advertise_service",
+            "service": f"{node}/list_parameters",
+            "type": "rcl_interfaces/srv/ListParameters",
+        },
+    )
+    return provider
+
+
+def test_get_param_names_gathers_every_nodes_list_after_the_own(harness):
+    """`node:param` from each node's list_parameters, asked at once; the caller is answered
+    when the last node has; a node that does not answer in time is left out."""
+    talker, silent, lidar = (serve_list(harness, n) for n in ("/talker", "/silent", "/lidar"))
+    caller = harness.connect()
+    harness.send(
+        caller,
+        {
+            "op": "call_service",
+            "service": "/rosapi/set_param",
+            "args": {"name": "own", "value": "1"},
+        },
+    )
+    harness.outbox(caller)
+    harness.send(caller, {"op": "call_service", "service": "/rosapi/get_param_names", "id": "n"})
+    for provider, names in ((talker, ["gain", "pid.kp"]), (lidar, ["rate_hz"])):
+        request = forwarded(harness, provider)
+        assert request["args"] == {"prefixes": [], "depth": 0}
+        answer(harness, provider, request, {"result": {"names": names, "prefixes": []}})
+    assert forwarded(harness, silent)["service"] == "/silent/list_parameters"
+    assert harness.outbox(caller) == []  # /silent has not answered yet
+    harness.advance(6.0)
+    response = reply(harness, caller)
+    assert response["result"] is True and response["id"] == "n"
+    assert response["values"]["names"] == [
+        "own",
+        "/lidar:rate_hz",
+        "/talker:gain",
+        "/talker:pid.kp",
+    ]
+
+
+def test_get_param_names_without_nodes_is_the_bridges_own(harness):
+    caller = harness.connect()
+    harness.send(caller, {"op": "call_service", "service": "/rosapi/get_param_names"})
+    assert reply(harness, caller)["values"] == {"names": []}

@@ -233,6 +233,68 @@ class ListParametersResponse(
 
 
 @dataclass
+class FloatingPointRange(IdlStruct, typename="rcl_interfaces::msg::dds_::FloatingPointRange_"):
+    from_value: float
+    to_value: float
+    step: float
+
+
+@dataclass
+class IntegerRange(IdlStruct, typename="rcl_interfaces::msg::dds_::IntegerRange_"):
+    from_value: t.int64
+    to_value: t.int64
+    step: t.uint64
+
+
+@dataclass
+class ParameterDescriptor(IdlStruct, typename="rcl_interfaces::msg::dds_::ParameterDescriptor_"):
+    name: str
+    type: t.uint8
+    description: str
+    additional_constraints: str
+    read_only: bool
+    dynamic_typing: bool
+    floating_point_range: t.sequence[FloatingPointRange, 1]
+    integer_range: t.sequence[IntegerRange, 1]
+
+
+@dataclass
+class DescribeParametersRequest(
+    IdlStruct, typename="rcl_interfaces::srv::dds_::DescribeParameters_Request_"
+):
+    guid: t.uint64
+    seq: t.int64
+    names: t.sequence[str]
+
+
+@dataclass
+class DescribeParametersResponse(
+    IdlStruct, typename="rcl_interfaces::srv::dds_::DescribeParameters_Response_"
+):
+    guid: t.uint64
+    seq: t.int64
+    descriptors: t.sequence[ParameterDescriptor]
+
+
+@dataclass
+class GetParameterTypesRequest(
+    IdlStruct, typename="rcl_interfaces::srv::dds_::GetParameterTypes_Request_"
+):
+    guid: t.uint64
+    seq: t.int64
+    names: t.sequence[str]
+
+
+@dataclass
+class GetParameterTypesResponse(
+    IdlStruct, typename="rcl_interfaces::srv::dds_::GetParameterTypes_Response_"
+):
+    guid: t.uint64
+    seq: t.int64
+    types: t.sequence[t.uint8]
+
+
+@dataclass
 class HumbleGid(IdlStruct, typename="rmw_dds_common::msg::dds_::Gid_"):
     data: t.array[t.uint8, 24]
 
@@ -453,6 +515,12 @@ def run_params(participant: DomainParticipant, node: str, timeout_s: float) -> d
             (f"/{node}/set_parameters", SetParametersRequest, SetParametersResponse),
             (f"/{node}/list_parameters", ListParametersRequest, ListParametersResponse),
             (f"/{node}/get_parameters", GetParametersRequest, GetParametersResponse),
+            (
+                f"/{node}/describe_parameters",
+                DescribeParametersRequest,
+                DescribeParametersResponse,
+            ),
+            (f"/{node}/get_parameter_types", GetParameterTypesRequest, GetParameterTypesResponse),
         ),
     )
     deadline_s = time.monotonic() + timeout_s
@@ -469,7 +537,15 @@ def run_params(participant: DomainParticipant, node: str, timeout_s: float) -> d
     )
     names = ["gain", "preset", "missing"]
     got = client.call("get_parameters", GetParametersRequest(client.guid, 3, names), deadline_s)
+    described = client.call(
+        "describe_parameters", DescribeParametersRequest(client.guid, 4, names), deadline_s
+    )
+    types = client.call(
+        "get_parameter_types", GetParameterTypesRequest(client.guid, 5, names), deadline_s
+    )
     return {
+        "descriptors": [[d.name, d.type] for d in described.descriptors],
+        "types": list(types.types),
         "ok": True,
         "set": [[r.successful, r.reason] for r in set_reply.results],
         "names": sorted(listed.result.names),

@@ -217,4 +217,6 @@ async def test_the_bridges_own_parameters_are_a_ros2_nodes(dds_domain, registry)
     assert answer["set"] == [[True, ""]]
     assert answer["names"] == ["gain", "preset"]
     assert answer["values"] == [[3, 2.5, 0], [2, 0.0, 7], [0, 0.0, 0]]
+    assert answer["descriptors"] == [["gain", 3], ["preset", 2], ["missing", 0]]
+    assert answer["types"] == [3, 2, 0]
     assert gain["value"] == "2.5"

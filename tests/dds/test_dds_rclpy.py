@@ -259,3 +259,17 @@ async def test_foxglove_client_reads_and_sets_the_rclpy_node_parameters(
     assert outcome["set"] == [gain] and outcome["update"] == [gain]
     assert node_saw["data"] == "gain=3.25" and after["value"] == "3.25"
     assert {"/rb_test_node.gain", "/rb_test_node.use_sim_time"} <= set(outcome["all"])
+
+
+async def test_get_param_names_lists_the_rclpy_nodes_parameters(ros2_node, bridge, registry):
+    """rosapi's get_param_names: the bridge's own names, then `node:param` of the rclpy node
+    (from its list_parameters)."""
+    node = ros2_node[2]
+    async with RosbridgeClient(bridge.url, registry=registry) as client:
+        await wait_for_service(client, "/rb_test_node/list_parameters")
+        await client.call_service("/rosapi/set_param", {"name": "rate_hz", "value": "2.5"})
+        listed = await client.call_service("/rosapi/get_param_names", {})
+    names = listed["names"]
+    assert names[0] == "rate_hz", node.output()
+    wanted = {"/rb_test_node:gain", "/rb_test_node:label", "/rb_test_node:use_sim_time"}
+    assert wanted <= set(names)
