@@ -108,6 +108,9 @@ class NodeParameterCalls:
         if len(params) == 1:
             return [None]
         singles = await asyncio.gather(*(self._get_node(node, [p]) for p in params))
+        failed = [one for one in singles if isinstance(one, str)]
+        if len(failed) == len(singles):
+            return failed[0]  # the node stopped answering: say so once
         return [one[0] if isinstance(one, list) else None for one in singles]
 
     async def get_all(self, nodes: list[str]) -> Outcome:

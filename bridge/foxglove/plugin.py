@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import asyncio
 import logging
+from collections.abc import Coroutine
 from typing import Any
 
 from bridge.effects import Send
@@ -218,7 +219,7 @@ class FoxgloveConnection:
         for op in reply.ops:
             self.host.send_op(self.client_id, op)
         if reply.node_sets or self._asks_nodes(reply):
-            self.host.spawn(self._node_parameters(reply), "foxglove node parameters")
+            self.host.spawn(self._guarded(self._node_parameters(reply)), "foxglove parameters")
         elif reply.parameters_after is not None:
             names, request_id = reply.parameters_after
             self.send(self.session.parameter_values(names, self.host.parameters(), request_id))
@@ -229,6 +230,14 @@ class FoxgloveConnection:
         if self.session.graph_subscribed and not self.session.graph_sent:
             self.session.graph_sent = True
             self.send(graph_changes({}, self.plugin.graph) or b"")
+
+    async def _guarded(self, work: Coroutine[Any, Any, None]) -> None:
+        """Run `work` for this client; a bug costs that request (a status), as in `receive`."""
+        try:
+            await work
+        except Exception as exc:
+            logger.exception("[%s] Foxglove parameters failed", self.node)
+            self.send(wire.status(wire.ERROR, f"internal error: {safe_text(str(exc), 200)}"))
 
     def _asks_nodes(self, reply: Reply) -> bool:
         """Whether the parameters to send back include ROS 2 nodes' (all of them: none named)."""

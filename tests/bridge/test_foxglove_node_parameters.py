@@ -4,9 +4,11 @@ foxglove_bridge splits them, values both ways, a SetParameters answer read per p
 from __future__ import annotations
 
 import numpy as np
+import orjson
 import pytest
 
 from bridge.foxglove import wire
+from bridge.foxglove.channels import ChannelTable
 from bridge.foxglove.node_parameters import (
     parameter_nodes,
     service_nodes,
@@ -15,6 +17,8 @@ from bridge.foxglove.node_parameters import (
     to_foxglove,
     to_ros,
 )
+from bridge.foxglove.session import FoxgloveSession
+from schemas.registry import TypeRegistry
 
 SERVICES = {"/talker/get_parameters", "/talker/list_parameters", "/ns/cam/get_parameters"}
 
@@ -78,3 +82,28 @@ def test_set_answers_name_what_was_refused() -> None:
     assert set_failures("/talker", ["a"], "timed out") == [
         ("a", "setting /talker.a failed: timed out")
     ]
+
+
+def test_the_session_sets_a_nodes_parameter_through_the_shell_not_rosapi() -> None:
+    """A node's parameter becomes a node set for the shell (no rosapi op); the bridge's own
+    still becomes rosapi's set_param; a value no parameter can hold is a status at once."""
+    registry = TypeRegistry()
+    session = FoxgloveSession(1, ChannelTable(registry), registry)
+    session.node_param = lambda name: split_name(name, SERVICES)
+    frame = orjson.dumps(
+        {
+            "op": "setParameters",
+            "id": "s",
+            "parameters": [
+                {"name": "/talker.gain", "value": 2, "type": "float64"},
+                {"name": "own", "value": 1},
+                {"name": "/talker.bad", "value": {"no": 1}},
+            ],
+        }
+    ).decode()
+    reply = session.receive(frame)
+    assert reply.node_sets == [("/talker", "gain", {"type": 3, "double_value": 2.0})]
+    assert [op["args"]["name"] for op in reply.ops] == ["own"]
+    assert reply.parameters_after == (["/talker.gain", "own", "/talker.bad"], "s")
+    [problem] = reply.problems
+    assert problem.startswith("setting '/talker.bad' failed: a ROS 2 parameter cannot hold")
