@@ -23,6 +23,7 @@ from bridge.foxglove.channels import ChannelTable, published_topics
 from bridge.foxglove.graph_view import connection_graph, graph_changes
 from bridge.foxglove.node_parameters import parameter_nodes, service_nodes, split_name
 from bridge.foxglove.param_calls import NodeParameterCalls, Outcome
+from bridge.foxglove.param_events import ParameterEvents
 from bridge.foxglove.playback import STATE_TOPIC, PlaybackWatch
 from bridge.foxglove.session import FoxgloveSession, Permit, Reply, allow_all
 from bridge.host import PluginHost
@@ -59,6 +60,7 @@ class FoxglovePlugin:
         self.playback = PlaybackWatch(host)
         self.graph: dict[str, Any] = connection_graph(host.graph.topics, host.graph.services)
         self._params: dict[str, str] = {}
+        self.parameter_events = ParameterEvents(host, self.tell_node_parameters)
 
     async def start(self) -> None:
         self.reconcile()
@@ -68,6 +70,7 @@ class FoxglovePlugin:
 
     async def stop(self) -> None:
         self.playback.stop()
+        self.parameter_events.follow(False)
 
     def _connect(self, client_id: int, subprotocol: str) -> FoxgloveConnection:
         self.reconcile()
@@ -116,6 +119,16 @@ class FoxglovePlugin:
             names = [n for n in changed if n in connection.session.parameter_names]
             if names:
                 connection.send(connection.session.parameter_values(names, params, None))
+
+    def follow_parameter_events(self) -> None:
+        """Follow `/parameter_events` while a client subscribes to a ROS 2 node's parameter."""
+        self.parameter_events.follow(
+            any(
+                c.session.node_param(name) is not None
+                for c in self.connections.values()
+                for name in c.session.parameter_names
+            )
+        )
 
     def watched(self, name: str) -> bool:
         """Whether a Foxglove client subscribed to updates of parameter `name`."""
@@ -225,6 +238,8 @@ class FoxgloveConnection:
             self.send(self.session.parameter_values(names, self.host.parameters(), request_id))
         if reply.asset is not None:
             self.host.spawn(self._fetch(reply.asset), "foxglove fetchAsset")
+        if reply.op in ("subscribeParameterUpdates", "unsubscribeParameterUpdates"):
+            self.plugin.follow_parameter_events()
         if any(op["op"] in GRAPH_OPS for op in reply.ops):
             self.plugin.reconcile()  # its advertisements are channels for the others at once
         if self.session.graph_subscribed and not self.session.graph_sent:
@@ -300,6 +315,7 @@ class FoxgloveConnection:
     def close(self) -> None:
         self.node_calls.close()
         self.plugin.connections.pop(self.client_id, None)
+        self.plugin.follow_parameter_events()
         summary = self._problems.summary(self.node, self.host.now_ns(), "Foxglove problems")
         if summary is not None:
             logger.warning("%s", summary)

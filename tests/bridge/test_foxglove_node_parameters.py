@@ -17,6 +17,7 @@ from bridge.foxglove.node_parameters import (
     to_foxglove,
     to_ros,
 )
+from bridge.foxglove.param_events import event_parameters
 from bridge.foxglove.session import FoxgloveSession
 from schemas.registry import TypeRegistry
 
@@ -107,3 +108,16 @@ def test_the_session_sets_a_nodes_parameter_through_the_shell_not_rosapi() -> No
     assert reply.parameters_after == (["/talker.gain", "own", "/talker.bad"], "s")
     [problem] = reply.problems
     assert problem.startswith("setting '/talker.bad' failed: a ROS 2 parameter cannot hold")
+
+
+def test_a_parameter_event_names_its_nodes_new_and_changed_parameters() -> None:
+    event = {
+        "node": "/talker",
+        "new_parameters": [{"name": "mode", "value": {"type": 4, "string_value": "fast"}}],
+        "changed_parameters": [{"name": "gain", "value": {"type": 3, "double_value": 2.0}}],
+        "deleted_parameters": [{"name": "old", "value": {"type": 0}}],
+    }
+    assert event_parameters(event) == [
+        {"name": "/talker.mode", "value": "fast"},
+        {"name": "/talker.gain", "value": 2.0, "type": "float64"},
+    ]

@@ -237,28 +237,38 @@ async def test_foxglove_client_reads_and_sets_the_rclpy_node_parameters(
 ):
     """Foxglove's FoxgloveClient (npm) names the node's parameters as foxglove_bridge does
     (`/rb_test_node.gain`): read with their types, set (the node itself sees the new value),
-    the update sent to the subscribed client, and listed by getParameters with no names."""
+    the update sent to the subscribed client, a change made through rosapi seen through
+    `/parameter_events`, and listed by getParameters with no names."""
     node = ros2_node[2]
     async with RosbridgeClient(bridge.url, registry=registry) as client:
         await wait_for_service(client, "/rb_test_node/list_parameters")
         await wait_for_service(client, "/rb_test_node/set_parameters")
         before = await client.call_service("/rosapi/get_param", {"name": "/rb_test_node:gain"})
         seen = await client.subscribe("/param_seen", "std_msgs/msg/String")
-        outcome = await asyncio.to_thread(
-            run_scenario, "foxglove_params.mjs", bridge.url, "/rb_test_node"
+        scenario = asyncio.create_task(
+            asyncio.to_thread(run_scenario, "foxglove_params.mjs", bridge.url, "/rb_test_node")
         )
+        n = 0
+        while not scenario.done():  # until the scenario, subscribed to `enabled`, sees one
+            n += 1
+            enabled = {"name": "/rb_test_node:enabled", "value": "true" if n % 2 else "false"}
+            await client.call_service("/rosapi/set_param", enabled)
+            await asyncio.wait({scenario}, timeout=0.3)
+        outcome = scenario.result()
         node_saw = await first(seen, lambda m: m["data"] == "gain=3.25")
         after = await client.call_service("/rosapi/get_param", {"name": "/rb_test_node:gain"})
     assert outcome["statuses"] == [] and outcome["errors"] == [], node.output()
     assert outcome["get"] == [
         {"name": "/rb_test_node.gain", "value": float(before["value"]), "type": "float64"},
         {"name": "/rb_test_node.label", "value": "riverbridge"},
-        {"name": "/rb_test_node.enabled", "value": True},
     ]
+    assert outcome["enabled"]["value"] in (True, False)  # set through rosapi meanwhile
     gain = {"name": "/rb_test_node.gain", "value": 3.25, "type": "float64"}
     assert outcome["set"] == [gain] and outcome["update"] == [gain]
     assert node_saw["data"] == "gain=3.25" and after["value"] == "3.25"
     assert {"/rb_test_node.gain", "/rb_test_node.use_sim_time"} <= set(outcome["all"])
+    assert outcome["external"]["name"] == "/rb_test_node.enabled"
+    assert isinstance(outcome["external"]["value"], bool)  # only rosapi set it
 
 
 async def test_get_param_names_lists_the_rclpy_nodes_parameters(ros2_node, bridge, registry):

@@ -1,7 +1,8 @@
 // Foxglove's own client library (npm `@foxglove/ws-protocol`, FoxgloveClient) reading and
 // setting a ROS 2 node's parameters through the bridge, named as foxglove_bridge names them
 // (`/node.param`): get by name, set with an id (answered with the new value) while
-// subscribed to its updates, and getParameters with no names (every node's). With SILENT, a
+// subscribed to its updates, an update of a change someone else makes (`enabled`, set by
+// the test through rosapi), and getParameters with no names (every node's). With SILENT, a
 // node whose parameter services never answer: its get and set end in status messages.
 // One JSON result line (common.mjs's contract).
 //
@@ -39,10 +40,18 @@ await until(() => result.capabilities);
 if (node !== "-") {
   client.getParameters([`${node}.gain`, `${node}.label`, `${node}.enabled`, `${node}.nope`], "get-1");
   result.get = (await reply("get-1")).parameters;
+  result.enabled = result.get.find((p) => p.name === `${node}.enabled`);
+  result.get = result.get.filter((p) => p.name !== `${node}.enabled`);
   client.subscribeParameterUpdates([`${node}.gain`]);
   client.setParameters([{ name: `${node}.gain`, value: 3.25, type: "float64" }], "set-1");
   result.set = (await reply("set-1")).parameters;
   result.update = (await until(() => values.find((v) => v.id === undefined))).parameters;
+  // A change made by someone else (rosapi, from the test) reaches it through /parameter_events.
+  client.subscribeParameterUpdates([`${node}.enabled`]);
+  const external = await until(() =>
+    values.find((v) => v.id === undefined && v.parameters.some((p) => p.name === `${node}.enabled`)),
+  );
+  result.external = external.parameters.find((p) => p.name === `${node}.enabled`);
   client.getParameters([], "all");
   result.all = (await reply("all")).parameters.map((p) => p.name);
 }
