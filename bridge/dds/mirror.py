@@ -13,10 +13,10 @@ What goes where:
   ignores what it injected itself and whatever the bridge publishes on its own account, and
   its readers ignore the participant's own writers, so nothing echoes and a message crosses
   each bridge once however many bridges share a domain;
-- every `RECONCILE_S` (and soon after a discovery change or a first message) the endpoints
-  are brought in step with the graph: topics clients publish get writers, topics clients
-  subscribe to get readers, client-provided services get DDS servers, remote services get
-  stand-ins, remote endpoints appear in the graph.
+- every `graph_mirror.RECONCILE_S` (and soon after a discovery change or a first message)
+  the endpoints are brought in step with the graph: topics clients publish get writers,
+  topics clients subscribe to get readers, client-provided services get DDS servers, remote
+  services get stand-ins, remote endpoints appear in the graph.
 """
 
 from __future__ import annotations
@@ -41,16 +41,17 @@ from bridge.dds.graph_sync import GraphSync
 from bridge.dds.outbox import Outbox, WriterThread
 from bridge.dds.param_node import ParamNode
 from bridge.dds.participant import DdsParticipant, DdsPlumbing, Pump
-from bridge.dds.qos import (
-    QosError,
-    QosProfile,
-    advertised_profile,
-    reader_profile,
-    strongest,
-)
+from bridge.dds.qos import QosError, QosProfile, advertised_profile, reader_profile
 from bridge.dds.service_mirror import ServiceMirror
-from bridge.dds.topic_mirror import Arrival, TopicMirror, Wanted
+from bridge.dds.topic_mirror import TopicMirror
 from bridge.errors import BridgeError, DdsStartError
+from bridge.graph_mirror import (
+    Arrival,
+    mirrored_nodes,
+    provided_by,
+    reconcile_forever,
+    wanted_topics,
+)
 from bridge.host import PluginHost
 from schemas.errors import SchemaError
 
@@ -61,7 +62,6 @@ if TYPE_CHECKING:
 
 logger = logging.getLogger("bridge.dds")
 
-RECONCILE_S = 0.1  # how late a new advertisement or subscription reaches DDS at most
 EXTERNAL_SOURCE = "dds"  # the name of the domain's nodes in rosapi's view of other graphs
 
 
@@ -102,7 +102,9 @@ class DdsMirror:
         self.host.add_sink(self)
         self.writer.start()
         self.pump.start()
-        self._task = asyncio.create_task(self._reconcile_forever(), name="bridge-dds")
+        self._task = asyncio.create_task(
+            reconcile_forever(self.reconcile, self._wake, logger, "DDS"), name="bridge-dds"
+        )
         logger.info(
             "DDS: domain %d on interface %s (peers %s, multicast %s) as node %s",
             self.config.dds_domain,
@@ -161,9 +163,7 @@ class DdsMirror:
     def local_nodes(self) -> set[str]:
         """Nodes of the websocket clients (not the mirror's own in-process clients) and, as a
         gateway, those other graphs' plug-ins speak for (`PluginHost.gateway_nodes`)."""
-        own = self.services.client_ids
-        clients = {s.node for s in self.host.clients().values() if s.client_id not in own}
-        return clients | self.host.gateway_nodes(EXTERNAL_SOURCE)
+        return mirrored_nodes(self.host, self.services.client_ids, EXTERNAL_SOURCE)
 
     # -- the domain's messages in ------------------------------------------------------------
 
@@ -171,9 +171,9 @@ class DdsMirror:
         local = self.local_nodes()
         for arrival in arrivals:
             reader = self.topics.readers.get(arrival.topic)
-            node = self.view.writer_node(arrival.writer_guid)
+            node = self.view.writer_node(arrival.sender_gid)
             if node is None or node in local:
-                node = participant_node(arrival.writer_guid or b"")
+                node = participant_node(arrival.sender_gid or b"")
             latch = reader is not None and reader.wanted.profile.transient_local
             self._injecting = True
             try:
@@ -207,23 +207,19 @@ class DdsMirror:
 
     # -- keeping DDS in step with the graph --------------------------------------------------
 
-    async def _reconcile_forever(self) -> None:
-        while True:
-            try:
-                self.reconcile()
-            except Exception:  # a bug here must not end the mirror
-                logger.exception("DDS: reconcile failed")
-            with contextlib.suppress(TimeoutError):
-                async with asyncio.timeout(RECONCILE_S):
-                    await self._wake.wait()
-            self._wake.clear()
-
     def reconcile(self) -> None:
         """Bring writers, readers, services and the graph's remote half in step."""
         graph = self.host.graph
         local = self.local_nodes()
         remote_topics = self.view.topics()
-        writers, readers = self._wanted_topics(local, remote_topics)
+        writers, readers = wanted_topics(
+            graph.topics.values(),
+            local,
+            remote_topics,
+            self._advertised,
+            self._reading,
+            readers_for=local | {self.actions.node},
+        )
         self.topics.sync(writers, readers)
         for message in self._waiting_first.values():
             self.topics.send(message)
@@ -231,17 +227,8 @@ class DdsMirror:
         self.graph_sync.apply(self.host, remote_topics, local)
         self.host.set_external_nodes(EXTERNAL_SOURCE, self.view.announced_nodes())
         self.host.claim_nodes(EXTERNAL_SOURCE, self._domain_nodes(remote_topics, local))
-        provided = {
-            name: entry.type_name
-            for name, entry in graph.services.items()
-            if entry.provider in local and entry.type_name
-        }
-        self.services.sync(provided, self.view.services())
-        local_actions = {
-            name: entry.type_name
-            for name, entry in graph.actions.items()
-            if entry.provider in local and entry.type_name
-        }
+        self.services.sync(provided_by(graph.services, local), self.view.services())
+        local_actions = provided_by(graph.actions, local)
         self.actions.sync(self.view.actions(), set(self.services.clients), set(local_actions))
         self.actions.sync_local(local_actions)
         topic_readers, topic_writers = self.topics.endpoint_guids()
@@ -259,26 +246,6 @@ class DdsMirror:
         injected = {node for _, node in self.graph_sync.publishers}
         serving = {s.node for s in self.view.services().values()}
         return (listed | injected | serving | set(self.view.announced_nodes())) - local
-
-    def _wanted_topics(
-        self,
-        local: set[str],
-        remote: dict[str, RemoteTopic],
-    ) -> tuple[dict[str, Wanted], dict[str, Wanted]]:
-        writers: dict[str, Wanted] = {}
-        readers: dict[str, Wanted] = {}
-        for entry in self.host.graph.topics.values():
-            if entry.type_name is None:
-                continue
-            publishing = [node for node in entry.publishers if node in local]
-            if publishing:
-                profiles = [self._advertised(entry, node) for node in publishing]
-                writers[entry.name] = Wanted(entry.type_name, strongest(profiles))
-            if any(node in local or node == self.actions.node for node in entry.subscribers):
-                seen = remote.get(entry.name)
-                offered = [p for ps in seen.publishers.values() for p in ps] if seen else []
-                readers[entry.name] = Wanted(entry.type_name, self._reading(entry, offered))
-        return writers, readers
 
     def _reading(self, entry: TopicEntry, offered: list[QosProfile]) -> QosProfile:
         """The reader profile: adapted to the writers, or as the subscribers' `qos` asks."""
