@@ -14,17 +14,23 @@ import contextlib
 import logging
 from collections.abc import Callable, Container, Iterable, Mapping
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Protocol
+from typing import TYPE_CHECKING, Protocol, TypeVar
 
 from bridge.dds.qos import QosProfile, strongest
 from bridge.host import PluginHost
-from schemas.values import Message
+from bridge.outgoing import ControlMessage
+from schemas.values import JsonObject, JsonValue, Message
 
 if TYPE_CHECKING:
     from bridge.dds.discovery import RemoteTopic
+    from bridge.effects import Send
     from bridge.graph import TopicEntry
 
 RECONCILE_S = 0.1  # how late a new advertisement or subscription reaches the middleware at most
+
+EndpointT = TypeVar("EndpointT")
+# (stand-in client id, the caller's request id, the service as the caller spelt it)
+WaitingCall = tuple[int, JsonValue, JsonValue]
 
 
 @dataclass(frozen=True)
@@ -113,3 +119,82 @@ async def reconcile_forever(
             async with asyncio.timeout(RECONCILE_S):
                 await wake.wait()
         wake.clear()
+
+
+def control_payload(send: Send) -> JsonObject:
+    """The op the core sends an in-process client (empty for a topic message)."""
+    return send.item.payload if isinstance(send.item, ControlMessage) else {}
+
+
+def called_endpoint(clients: Mapping[str, EndpointT], payload: JsonObject) -> EndpointT | None:
+    """The endpoint of the service a stand-in's `call_service` names (relative names too)."""
+    if payload.get("op") != "call_service":
+        return None
+    name = payload.get("service")
+    return clients.get(name if isinstance(name, str) and name.startswith("/") else f"/{name}")
+
+
+def waiting_call(send: Send, payload: JsonObject) -> WaitingCall:
+    """What answering a stand-in's `call_service` needs later."""
+    return (send.client_id, payload.get("id"), payload.get("service"))
+
+
+class StandIns:
+    """In-process clients named like remote nodes, which advertise the remote nodes' services
+    in the bridge; the core forwards local calls to them (`receive`). One per remote node,
+    gone with its last service. `client_ids` holds the mirror's own clients, these included."""
+
+    def __init__(
+        self,
+        host: PluginHost,
+        receive: Callable[[Send], None],
+        peer: str,
+        client_ids: set[int],
+    ) -> None:
+        self._host, self._receive, self._peer = host, receive, peer
+        self.client_ids = client_ids
+        self.by_node: dict[str, int] = {}  # remote node -> its stand-in client id
+
+    def node_is_a_client(self, node: str) -> bool:
+        """True if a websocket client has that node name: a stand-in never impersonates it."""
+        return any(
+            s.node == node
+            for s in self._host.clients().values()
+            if s.client_id not in self.client_ids
+        )
+
+    def advertise(self, node: str, service: str, type_name: str) -> None:
+        stand_in = self.by_node.get(node)
+        if stand_in is None:
+            stand_in = self._host.connect_internal(node, self._receive, peer=self._peer)
+            self.by_node[node] = stand_in
+            self.client_ids.add(stand_in)
+        op: JsonObject = {"op": "advertise_service", "service": service, "type": type_name}
+        self._host.send_op(stand_in, op)
+
+    def unadvertise(self, node: str, service: str, node_still_serves: bool) -> bool:
+        """Withdraw `service` (which fails the calls still waiting on it); the stand-in goes
+        unless `node_still_serves`. False if `node` has no stand-in."""
+        stand_in = self.by_node.get(node)
+        if stand_in is None:
+            return False
+        self._host.send_op(stand_in, {"op": "unadvertise_service", "service": service})
+        if not node_still_serves:
+            del self.by_node[node]
+            self.client_ids.discard(stand_in)
+            self._host.disconnect_internal(stand_in)
+        return True
+
+    def answer(self, waiting: WaitingCall, values: JsonValue, ok: bool) -> None:
+        """The `service_response` to a call the core forwarded to a stand-in."""
+        stand_in, request_id, spelling = waiting
+        if stand_in not in self.client_ids:
+            return  # the stand-in went meanwhile: the core failed the call already
+        op: JsonObject = {
+            "op": "service_response",
+            "id": request_id,
+            "service": spelling,
+            "values": values,
+            "result": ok,
+        }
+        self._host.send_op(stand_in, op)

@@ -25,10 +25,16 @@ from bridge.dds.participant import DdsPlumbing
 from bridge.dds.request_header import RequestId
 from bridge.dds.service_endpoints import Received, ServiceClient, ServiceServer
 from bridge.effects import Send
+from bridge.graph_mirror import (
+    StandIns,
+    WaitingCall,
+    called_endpoint,
+    control_payload,
+    waiting_call,
+)
 from bridge.host import PluginHost
-from bridge.outgoing import ControlMessage
 from schemas.errors import SchemaError
-from schemas.values import JsonObject, JsonValue, Message
+from schemas.values import JsonObject, Message
 
 logger = logging.getLogger("bridge.dds")
 
@@ -52,11 +58,10 @@ class ServiceMirror:
         self.client_ids = {self.caller}
         self.servers: dict[str, ServiceServer] = {}
         self.clients: dict[str, ServiceClient] = {}
-        self.stand_ins: dict[str, int] = {}  # remote node -> its stand-in client id
+        self.stand_ins = StandIns(host, self._stand_in_receives, "dds", self.client_ids)
         self._remote: dict[str, RemoteService] = {}
         self._from_dds: dict[str, tuple[ServiceServer, RequestId]] = {}
-        # (service, sequence) -> (stand-in, the provider's request id, the service's spelling)
-        self._to_dds: dict[tuple[str, int], tuple[int, JsonValue, JsonValue]] = {}
+        self._to_dds: dict[tuple[str, int], WaitingCall] = {}  # by (service, sequence)
         self._calls = 0
         self._refused: set[str] = set()
 
@@ -107,30 +112,16 @@ class ServiceMirror:
 
     def _adopt(self, service: RemoteService) -> bool:
         """Advertise a remote server's service through a stand-in named like its node."""
-        if any(
-            s.node == service.node
-            for s in self._host.clients().values()
-            if s.client_id not in self.client_ids
-        ):
-            return False  # a websocket client has that node name; never impersonate it
+        if self.stand_ins.node_is_a_client(service.node):
+            return False
         client = self._open(
             ServiceClient, service.name, service.type_name, self._on_reply, service.request_header
         )
         if client is None:
             return False
-        stand_in = self.stand_ins.get(service.node)
-        if stand_in is None:
-            stand_in = self._host.connect_internal(
-                service.node, self._stand_in_receives, peer="dds"
-            )
-            self.stand_ins[service.node] = stand_in
-            self.client_ids.add(stand_in)
         self.clients[service.name] = client
         self._remote[service.name] = service
-        self._send(
-            stand_in,
-            {"op": "advertise_service", "service": service.name, "type": service.type_name},
-        )
+        self.stand_ins.advertise(service.node, service.name, service.type_name)
         return True
 
     def _withdraw(self, name: str) -> bool:
@@ -140,15 +131,9 @@ class ServiceMirror:
             client.close()
         for key in [k for k in self._to_dds if k[0] == name]:  # unadvertising fails them
             del self._to_dds[key]
-        stand_in = self.stand_ins.get(service.node)
-        if stand_in is None:
-            return client is not None
-        self._send(stand_in, {"op": "unadvertise_service", "service": name})
-        if not any(s.node == service.node for s in self._remote.values()):
-            del self.stand_ins[service.node]
-            self.client_ids.discard(stand_in)
-            self._host.disconnect_internal(stand_in)
-        return True
+        still_serves = any(s.node == service.node for s in self._remote.values())
+        withdrawn = self.stand_ins.unadvertise(service.node, name, still_serves)
+        return withdrawn or client is not None
 
     def _send(self, client_id: int, op: JsonObject) -> None:
         self._host.send_op(client_id, op)
@@ -176,7 +161,7 @@ class ServiceMirror:
         )
 
     def _caller_receives(self, send: Send) -> None:
-        payload = send.item.payload if isinstance(send.item, ControlMessage) else {}
+        payload = control_payload(send)
         waiting = self._from_dds.pop(str(payload.get("id")), None)
         if payload.get("op") != "service_response" or waiting is None:
             return
@@ -193,35 +178,14 @@ class ServiceMirror:
     # -- local callers using remote servers -------------------------------------------------
 
     def _stand_in_receives(self, send: Send) -> None:
-        payload = send.item.payload if isinstance(send.item, ControlMessage) else {}
-        if payload.get("op") != "call_service":
-            return
-        name = payload.get("service")
-        client = self.clients.get(
-            name if isinstance(name, str) and name.startswith("/") else f"/{name}"
-        )
+        payload = control_payload(send)
+        client = called_endpoint(self.clients, payload)
         if client is None:
             return
         request = client.request(payload.get("args") or {})
-        self._to_dds[(client.service, request.sequence)] = (
-            send.client_id,
-            payload.get("id"),
-            payload.get("service"),
-        )
+        self._to_dds[(client.service, request.sequence)] = waiting_call(send, payload)
 
     def _on_reply(self, service: str, request: RequestId, msg: Message) -> None:
         waiting = self._to_dds.pop((service, request.sequence), None)
-        if waiting is None:
-            return
-        stand_in, request_id, spelling = waiting
-        if stand_in in self.client_ids:
-            self._send(
-                stand_in,
-                {
-                    "op": "service_response",
-                    "id": request_id,
-                    "service": spelling,
-                    "values": msg,
-                    "result": True,
-                },
-            )
+        if waiting is not None:
+            self.stand_ins.answer(waiting, msg, ok=True)

@@ -22,8 +22,14 @@ from typing import Any
 import zenoh
 
 from bridge.effects import Send
+from bridge.graph_mirror import (
+    StandIns,
+    WaitingCall,
+    called_endpoint,
+    control_payload,
+    waiting_call,
+)
 from bridge.host import PluginHost
-from bridge.outgoing import ControlMessage
 from bridge.zenoh.attachment import (
     Attachment,
     AttachmentProblem,
@@ -37,7 +43,7 @@ from bridge.zenoh.node import Declared, ZenohNode
 from bridge.zenoh.problems import ProblemLog
 from schemas.codec_cdr import from_cdr, to_cdr
 from schemas.errors import SchemaError
-from schemas.values import JsonObject, JsonValue, Message
+from schemas.values import Message
 
 logger = logging.getLogger("bridge.zenoh")
 
@@ -81,9 +87,9 @@ class ZenohServices:
         self.client_ids = {self.caller}
         self.servers: dict[str, _Server] = {}
         self.clients: dict[str, _Client] = {}
-        self.stand_ins: dict[str, int] = {}  # remote node -> its stand-in client id
+        self.stand_ins = StandIns(host, self._stand_in_receives, "zenoh", self.client_ids)
         self._from_zenoh: dict[str, _Waiting] = {}
-        self._to_zenoh: dict[tuple[str, int], tuple[int, JsonValue, JsonValue]] = {}
+        self._to_zenoh: dict[tuple[str, int], WaitingCall] = {}  # by (service, sequence)
         self._calls = itertools.count(1)
 
     # -- keeping in step ---------------------------------------------------------------------
@@ -127,12 +133,8 @@ class ZenohServices:
 
     def _adopt(self, service: RemoteZenohService) -> None:
         """Advertise a remote server's service through a stand-in named like its node."""
-        if any(
-            s.node == service.node
-            for s in self._host.clients().values()
-            if s.client_id not in self.client_ids
-        ):
-            return  # a websocket client has that node name; never impersonate it
+        if self.stand_ins.node_is_a_client(service.node):
+            return
         try:
             key = data_key(self._node.domain, service.name, service.type_name, service.type_hash)
         except (KeyProblem, ValueError) as exc:
@@ -142,17 +144,7 @@ class ZenohServices:
         self.clients[service.name] = _Client(
             service, key, self._node.declare(EntityKind.CLIENT, endpoint)
         )
-        stand_in = self.stand_ins.get(service.node)
-        if stand_in is None:
-            stand_in = self._host.connect_internal(
-                service.node, self._stand_in_receives, peer="zenoh"
-            )
-            self.stand_ins[service.node] = stand_in
-            self.client_ids.add(stand_in)
-        self._host.send_op(
-            stand_in,
-            {"op": "advertise_service", "service": service.name, "type": service.type_name},
-        )
+        self.stand_ins.advertise(service.node, service.name, service.type_name)
 
     def _withdraw(self, name: str) -> None:
         client = self.clients.pop(name)
@@ -160,14 +152,8 @@ class ZenohServices:
         for key in [k for k in self._to_zenoh if k[0] == name]:  # unadvertising fails them
             del self._to_zenoh[key]
         node = client.remote.node
-        stand_in = self.stand_ins.get(node)
-        if stand_in is None:
-            return
-        self._host.send_op(stand_in, {"op": "unadvertise_service", "service": name})
-        if not any(c.remote.node == node for c in self.clients.values()):
-            del self.stand_ins[node]
-            self.client_ids.discard(stand_in)
-            self._host.disconnect_internal(stand_in)
+        still_serves = any(c.remote.node == node for c in self.clients.values())
+        self.stand_ins.unadvertise(node, name, still_serves)
 
     def close(self) -> None:
         self.sync({}, {})
@@ -211,7 +197,7 @@ class ZenohServices:
         )
 
     def _caller_receives(self, send: Send) -> None:
-        payload = send.item.payload if isinstance(send.item, ControlMessage) else {}
+        payload = control_payload(send)
         waiting = self._from_zenoh.pop(str(payload.get("id")), None)
         if payload.get("op") != "service_response" or waiting is None:
             return
@@ -235,16 +221,11 @@ class ZenohServices:
     # -- local callers using remote servers --------------------------------------------------
 
     def _stand_in_receives(self, send: Send) -> None:
-        payload = send.item.payload if isinstance(send.item, ControlMessage) else {}
-        if payload.get("op") != "call_service":
-            return
-        name = payload.get("service")
-        client = self.clients.get(
-            name if isinstance(name, str) and name.startswith("/") else f"/{name}"
-        )
+        payload = control_payload(send)
+        client = called_endpoint(self.clients, payload)
         if client is None:
             return
-        waiting = (send.client_id, payload.get("id"), payload.get("service"))
+        waiting = waiting_call(send, payload)
         args = payload.get("args")
         try:
             cdr = to_cdr(
@@ -253,7 +234,7 @@ class ZenohServices:
                 args if isinstance(args, dict) else {},
             )
         except SchemaError as exc:
-            self._answer(waiting, f"request does not encode: {exc}", ok=False)
+            self.stand_ins.answer(waiting, f"request does not encode: {exc}", ok=False)
             return
         sequence = next(client.sequence)
         self._to_zenoh[(client.remote.name, sequence)] = waiting
@@ -286,21 +267,5 @@ class ZenohServices:
 
     def _on_reply(self, name: str, sequence: int, result: Message | str) -> None:
         waiting = self._to_zenoh.pop((name, sequence), None)
-        if waiting is not None and waiting[0] in self.client_ids:
-            if isinstance(result, str):
-                self._answer(waiting, result, ok=False)
-            else:
-                self._answer(waiting, result, ok=True)
-
-    def _answer(
-        self, waiting: tuple[int, JsonValue, JsonValue], values: JsonValue, ok: bool
-    ) -> None:
-        stand_in, request_id, spelling = waiting
-        op: JsonObject = {
-            "op": "service_response",
-            "id": request_id,
-            "service": spelling,
-            "values": values,
-            "result": ok,
-        }
-        self._host.send_op(stand_in, op)
+        if waiting is not None:
+            self.stand_ins.answer(waiting, result, ok=not isinstance(result, str))
