@@ -2,8 +2,9 @@
 
 A mirror joins the bridge's graph to an external one through its `PluginHost`. Which nodes it
 speaks for, how often it brings the middleware in step, which topics want a writer or a reader
-and with what QoS, and how remote servers' services appear in the bridge (a stand-in client
-named like the remote node) do not depend on DDS or Zenoh: they are written here once, and
+and with what QoS, how the middleware's requests reach local providers (the mirror's own
+client) and how remote servers' services appear in the bridge (a stand-in client named like
+the remote node) do not depend on DDS or Zenoh: they are written here once, and
 each mirror supplies only what its middleware does differently.
 """
 
@@ -11,10 +12,11 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import itertools
 import logging
 from collections.abc import Callable, Container, Iterable, Mapping
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Protocol, TypeVar
+from typing import TYPE_CHECKING, Generic, Protocol, TypeVar
 
 from bridge.dds.qos import QosProfile, strongest
 from bridge.host import PluginHost
@@ -29,6 +31,7 @@ if TYPE_CHECKING:
 RECONCILE_S = 0.1  # how late a new advertisement or subscription reaches the middleware at most
 
 EndpointT = TypeVar("EndpointT")
+WaitingT = TypeVar("WaitingT")
 # (stand-in client id, the caller's request id, the service as the caller spelt it)
 WaitingCall = tuple[int, JsonValue, JsonValue]
 
@@ -105,20 +108,38 @@ def wanted_topics(
     return writers, readers
 
 
-async def reconcile_forever(
-    reconcile: Callable[[], None], wake: asyncio.Event, logger: logging.Logger, label: str
-) -> None:
-    """Call `reconcile` every `RECONCILE_S`, or sooner once `wake` is set, until cancelled; a
-    failing reconcile is logged (a bug there must not end the mirror)."""
-    while True:
-        try:
-            reconcile()
-        except Exception:
-            logger.exception("%s: reconcile failed", label)
-        with contextlib.suppress(TimeoutError):
-            async with asyncio.timeout(RECONCILE_S):
-                await wake.wait()
-        wake.clear()
+class Reconciler:
+    """Runs a mirror's `reconcile` every `RECONCILE_S` on the loop, and soon after `wake()`
+    (a discovery change, a first message), from `start()` to `stop()`; a failing reconcile is
+    logged (a bug there must not end the mirror)."""
+
+    def __init__(self, reconcile: Callable[[], None], logger: logging.Logger, label: str) -> None:
+        self._reconcile, self._logger, self._label = reconcile, logger, label
+        self._wake = asyncio.Event()
+        self._task: asyncio.Task[None] | None = None
+
+    def start(self, task_name: str) -> None:
+        self._task = asyncio.create_task(self._forever(), name=task_name)
+
+    def wake(self) -> None:
+        self._wake.set()
+
+    async def stop(self) -> None:
+        if self._task is not None:
+            self._task.cancel()
+            with contextlib.suppress(asyncio.CancelledError):
+                await self._task
+
+    async def _forever(self) -> None:
+        while True:
+            try:
+                self._reconcile()
+            except Exception:
+                self._logger.exception("%s: reconcile failed", self._label)
+            with contextlib.suppress(TimeoutError):
+                async with asyncio.timeout(RECONCILE_S):
+                    await self._wake.wait()
+            self._wake.clear()
 
 
 def control_payload(send: Send) -> JsonObject:
@@ -137,6 +158,40 @@ def called_endpoint(clients: Mapping[str, EndpointT], payload: JsonObject) -> En
 def waiting_call(send: Send, payload: JsonObject) -> WaitingCall:
     """What answering a stand-in's `call_service` needs later."""
     return (send.client_id, payload.get("id"), payload.get("service"))
+
+
+class Caller(Generic[WaitingT]):
+    """The mirror's own in-process client (its node): a request from the middleware becomes
+    its `call_service` to the local provider, and the provider's `service_response` goes to
+    `answered` with what `call` was given to remember the request by."""
+
+    def __init__(
+        self,
+        host: PluginHost,
+        node: str,
+        peer: str,
+        answered: Callable[[WaitingT, JsonObject], None],
+    ) -> None:
+        self._host, self._peer, self._answered = host, peer, answered
+        self.client_id = host.connect_internal(node, self._receives, peer=peer)
+        self.waiting: dict[str, WaitingT] = {}
+        self._calls = itertools.count(1)
+
+    def call(self, service: str, args: JsonValue, waiting: WaitingT) -> None:
+        call_id = f"{self._peer}:{next(self._calls)}"
+        self.waiting[call_id] = waiting
+        op: JsonObject = {"op": "call_service", "service": service, "args": args, "id": call_id}
+        self._host.send_op(self.client_id, op)
+
+    def _receives(self, send: Send) -> None:
+        payload = control_payload(send)
+        waiting = self.waiting.pop(str(payload.get("id")), None)
+        if payload.get("op") == "service_response" and waiting is not None:
+            self._answered(waiting, payload)
+
+    def close(self) -> None:
+        self.waiting.clear()
+        self._host.disconnect_internal(self.client_id)
 
 
 class StandIns:

@@ -22,11 +22,11 @@ What goes where:
 from __future__ import annotations
 
 import asyncio
-import contextlib
 import logging
 from collections.abc import Callable
 from typing import TYPE_CHECKING
 
+from bridge import graph_mirror
 from bridge.dds.action_mirror import ActionMirror
 from bridge.dds.announce import Announcer
 from bridge.dds.cyclone_xml import CycloneSettings
@@ -45,13 +45,6 @@ from bridge.dds.qos import QosError, QosProfile, advertised_profile, reader_prof
 from bridge.dds.service_mirror import ServiceMirror
 from bridge.dds.topic_mirror import TopicMirror
 from bridge.errors import BridgeError, DdsStartError
-from bridge.graph_mirror import (
-    Arrival,
-    mirrored_nodes,
-    provided_by,
-    reconcile_forever,
-    wanted_topics,
-)
 from bridge.host import PluginHost
 from schemas.errors import SchemaError
 
@@ -77,8 +70,7 @@ class DdsMirror:
         self._injecting = False
         self._waiting_first: dict[str, TopicMessage] = {}
         self._qos_warned: set[tuple[str, str]] = set()
-        self._task: asyncio.Task[None] | None = None
-        self._wake = asyncio.Event()
+        self._reconciler = graph_mirror.Reconciler(self.reconcile, logger, "DDS")
 
     async def start(self) -> None:
         loop = self._loop = asyncio.get_running_loop()
@@ -102,9 +94,7 @@ class DdsMirror:
         self.host.add_sink(self)
         self.writer.start()
         self.pump.start()
-        self._task = asyncio.create_task(
-            reconcile_forever(self.reconcile, self._wake, logger, "DDS"), name="bridge-dds"
-        )
+        self._reconciler.start("bridge-dds")
         logger.info(
             "DDS: domain %d on interface %s (peers %s, multicast %s) as node %s",
             self.config.dds_domain,
@@ -134,10 +124,7 @@ class DdsMirror:
             self.pump.watch(condition, self._take_discovery)
 
     async def stop(self) -> None:
-        if self._task is not None:
-            self._task.cancel()
-            with contextlib.suppress(asyncio.CancelledError):
-                await self._task
+        await self._reconciler.stop()
         self.host.remove_sink(self)
         self.pump.stop()
         self.writer.stop()
@@ -158,16 +145,16 @@ class DdsMirror:
             return
         if not self.topics.send(message) and not self.topics.refused(message.topic):
             self._waiting_first[message.topic] = message  # its writer is made next
-            self._wake.set()
+            self._reconciler.wake()
 
     def local_nodes(self) -> set[str]:
         """Nodes of the websocket clients (not the mirror's own in-process clients) and, as a
         gateway, those other graphs' plug-ins speak for (`PluginHost.gateway_nodes`)."""
-        return mirrored_nodes(self.host, self.services.client_ids, EXTERNAL_SOURCE)
+        return graph_mirror.mirrored_nodes(self.host, self.services.client_ids, EXTERNAL_SOURCE)
 
     # -- the domain's messages in ------------------------------------------------------------
 
-    def _inject(self, arrivals: list[Arrival]) -> None:
+    def _inject(self, arrivals: list[graph_mirror.Arrival]) -> None:
         local = self.local_nodes()
         for arrival in arrivals:
             reader = self.topics.readers.get(arrival.topic)
@@ -199,11 +186,11 @@ class DdsMirror:
 
     def _snapshot_seen(self, snapshot: Snapshot) -> None:
         self.view.update_snapshot(snapshot)
-        self._wake.set()
+        self._reconciler.wake()
 
     def _nodes_seen(self, participant: bytes, nodes: tuple[NodeEntities, ...]) -> None:
         self.view.update_nodes(participant, nodes)
-        self._wake.set()
+        self._reconciler.wake()
 
     # -- keeping DDS in step with the graph --------------------------------------------------
 
@@ -212,7 +199,7 @@ class DdsMirror:
         graph = self.host.graph
         local = self.local_nodes()
         remote_topics = self.view.topics()
-        writers, readers = wanted_topics(
+        writers, readers = graph_mirror.wanted_topics(
             graph.topics.values(),
             local,
             remote_topics,
@@ -227,8 +214,8 @@ class DdsMirror:
         self.graph_sync.apply(self.host, remote_topics, local)
         self.host.set_external_nodes(EXTERNAL_SOURCE, self.view.announced_nodes())
         self.host.claim_nodes(EXTERNAL_SOURCE, self._domain_nodes(remote_topics, local))
-        self.services.sync(provided_by(graph.services, local), self.view.services())
-        local_actions = provided_by(graph.actions, local)
+        self.services.sync(graph_mirror.provided_by(graph.services, local), self.view.services())
+        local_actions = graph_mirror.provided_by(graph.actions, local)
         self.actions.sync(self.view.actions(), set(self.services.clients), set(local_actions))
         self.actions.sync_local(local_actions)
         topic_readers, topic_writers = self.topics.endpoint_guids()

@@ -20,18 +20,12 @@ import logging
 from collections.abc import Callable
 from typing import TypeVar
 
+from bridge import graph_mirror
 from bridge.dds.discovery import RemoteService
 from bridge.dds.participant import DdsPlumbing
 from bridge.dds.request_header import RequestId
 from bridge.dds.service_endpoints import Received, ServiceClient, ServiceServer
 from bridge.effects import Send
-from bridge.graph_mirror import (
-    StandIns,
-    WaitingCall,
-    called_endpoint,
-    control_payload,
-    waiting_call,
-)
 from bridge.host import PluginHost
 from schemas.errors import SchemaError
 from schemas.values import JsonObject, Message
@@ -54,15 +48,16 @@ class ServiceMirror:
     ) -> None:
         self._host = host
         self._dds, self._to_loop = dds, to_loop
-        self.caller = host.connect_internal(node, self._caller_receives, peer="dds")
-        self.client_ids = {self.caller}
+        self.caller = graph_mirror.Caller(host, node, "dds", self._answered)
+        self.client_ids = {self.caller.client_id}
         self.servers: dict[str, ServiceServer] = {}
         self.clients: dict[str, ServiceClient] = {}
-        self.stand_ins = StandIns(host, self._stand_in_receives, "dds", self.client_ids)
+        self.stand_ins = graph_mirror.StandIns(
+            host, self._stand_in_receives, "dds", self.client_ids
+        )
         self._remote: dict[str, RemoteService] = {}
-        self._from_dds: dict[str, tuple[ServiceServer, RequestId]] = {}
-        self._to_dds: dict[tuple[str, int], WaitingCall] = {}  # by (service, sequence)
-        self._calls = 0
+        # (service, sequence) -> the call waiting for the server's reply
+        self._to_dds: dict[tuple[str, int], graph_mirror.WaitingCall] = {}
         self._refused: set[str] = set()
 
     # -- keeping in step ---------------------------------------------------------------------
@@ -135,9 +130,6 @@ class ServiceMirror:
         withdrawn = self.stand_ins.unadvertise(service.node, name, still_serves)
         return withdrawn or client is not None
 
-    def _send(self, client_id: int, op: JsonObject) -> None:
-        self._host.send_op(client_id, op)
-
     def guids(self) -> tuple[list[bytes], list[bytes]]:
         """(reader GUIDs, writer GUIDs) of every service endpoint."""
         pairs = [e.guids() for e in [*self.servers.values(), *self.clients.values()]]
@@ -145,7 +137,7 @@ class ServiceMirror:
 
     def close(self) -> None:
         self.sync({}, {})
-        self._host.disconnect_internal(self.caller)
+        self.caller.close()
 
     # -- DDS clients calling local providers ------------------------------------------------
 
@@ -153,18 +145,10 @@ class ServiceMirror:
         server = self.servers.get(service)
         if server is None:
             return
-        self._calls += 1
-        call_id = f"dds:{self._calls}"
-        self._from_dds[call_id] = (server, request)
-        self._send(
-            self.caller, {"op": "call_service", "service": service, "args": msg, "id": call_id}
-        )
+        self.caller.call(service, msg, (server, request))
 
-    def _caller_receives(self, send: Send) -> None:
-        payload = control_payload(send)
-        waiting = self._from_dds.pop(str(payload.get("id")), None)
-        if payload.get("op") != "service_response" or waiting is None:
-            return
+    def _answered(self, waiting: tuple[ServiceServer, RequestId], payload: JsonObject) -> None:
+        """The local provider's `service_response` to a DDS request: the DDS reply."""
         server, request = waiting
         if payload.get("result") is True and isinstance(payload.get("values"), dict):
             server.send(request, payload["values"])
@@ -178,12 +162,12 @@ class ServiceMirror:
     # -- local callers using remote servers -------------------------------------------------
 
     def _stand_in_receives(self, send: Send) -> None:
-        payload = control_payload(send)
-        client = called_endpoint(self.clients, payload)
+        payload = graph_mirror.control_payload(send)
+        client = graph_mirror.called_endpoint(self.clients, payload)
         if client is None:
             return
         request = client.request(payload.get("args") or {})
-        self._to_dds[(client.service, request.sequence)] = waiting_call(send, payload)
+        self._to_dds[(client.service, request.sequence)] = graph_mirror.waiting_call(send, payload)
 
     def _on_reply(self, service: str, request: RequestId, msg: Message) -> None:
         waiting = self._to_dds.pop((service, request.sequence), None)

@@ -17,23 +17,16 @@ What goes where:
 from __future__ import annotations
 
 import asyncio
-import contextlib
 import logging
 from typing import TYPE_CHECKING
 
 import zenoh
 
+from bridge import graph_mirror
 from bridge.dds.discovery import RemoteTopic
 from bridge.dds.graph_sync import GraphSync
 from bridge.dds.qos import QosProfile, advertised_profile, reader_profile
 from bridge.errors import BridgeError, ZenohStartError
-from bridge.graph_mirror import (
-    Arrival,
-    mirrored_nodes,
-    provided_by,
-    reconcile_forever,
-    wanted_topics,
-)
 from bridge.host import PluginHost
 from bridge.zenoh.graph import ZenohGraph
 from bridge.zenoh.liveliness import ADMIN_SPACE, TokenProblem
@@ -66,8 +59,7 @@ class ZenohMirror:
         self._injected_nodes: set[str] = set()
         self._waiting_first: dict[str, TopicMessage] = {}
         self._remote_topics: dict[str, RemoteTopic] = {}  # as of the last reconcile
-        self._task: asyncio.Task[None] | None = None
-        self._wake = asyncio.Event()
+        self._reconciler = graph_mirror.Reconciler(self.reconcile, logger, "Zenoh")
 
     async def start(self) -> None:
         loop = self._loop = asyncio.get_running_loop()
@@ -92,9 +84,7 @@ class ZenohMirror:
             history=True,
         )
         self.host.add_sink(self)
-        self._task = asyncio.create_task(
-            reconcile_forever(self.reconcile, self._wake, logger, "Zenoh"), name="bridge-zenoh"
-        )
+        self._reconciler.start("bridge-zenoh")
         logger.info(
             "Zenoh: domain %d as node %s (session %s, distro %s), listening on %s, connecting "
             "to %s",
@@ -107,10 +97,7 @@ class ZenohMirror:
         )
 
     async def stop(self) -> None:
-        if self._task is not None:
-            self._task.cancel()
-            with contextlib.suppress(asyncio.CancelledError):
-                await self._task
+        await self._reconciler.stop()
         self.host.remove_sink(self)
         self._liveliness.undeclare()
         self.services.close()
@@ -129,16 +116,16 @@ class ZenohMirror:
             return
         if not self.topics.send(message):
             self._waiting_first[message.topic] = message  # its publisher is made next
-            self._wake.set()
+            self._reconciler.wake()
 
     def local_nodes(self) -> set[str]:
         """Nodes whose endpoints and messages go to Zenoh: the websocket clients' and those
         other graphs' plug-ins speak for (not the mirror's own in-process clients)."""
-        return mirrored_nodes(self.host, self.services.client_ids, SOURCE)
+        return graph_mirror.mirrored_nodes(self.host, self.services.client_ids, SOURCE)
 
     # -- Zenoh's messages and tokens in ------------------------------------------------------
 
-    def _inject(self, arrival: Arrival) -> None:
+    def _inject(self, arrival: graph_mirror.Arrival) -> None:
         node = self._publisher_node(arrival)
         subscriber = self.topics.subscribers.get(arrival.topic)
         latch = subscriber is not None and subscriber.wanted.profile.transient_local
@@ -155,9 +142,9 @@ class ZenohMirror:
         self.graph_sync.noted_publisher(arrival.topic, node)
         if node not in self._injected_nodes:
             self._injected_nodes.add(node)
-            self._wake.set()
+            self._reconciler.wake()
 
-    def _publisher_node(self, arrival: Arrival) -> str:
+    def _publisher_node(self, arrival: graph_mirror.Arrival) -> str:
         """The remote node that published `arrival`: the topic's one remote publisher, else a
         name made from the sample's source GID."""
         topic = self._remote_topics.get(arrival.topic)
@@ -175,7 +162,7 @@ class ZenohMirror:
         except TokenProblem as exc:
             self.problems.dropped("liveliness", "malformed token", str(exc))
             return
-        self._wake.set()
+        self._reconciler.wake()
 
     # -- keeping Zenoh in step with the graph ------------------------------------------------
 
@@ -183,7 +170,7 @@ class ZenohMirror:
         """Bring publishers, subscribers, services and the graph's remote half in step."""
         local = self.local_nodes()
         remote_topics = self._remote_topics = self.graph.topics()
-        publishers, subscribers = wanted_topics(
+        publishers, subscribers = graph_mirror.wanted_topics(
             self.host.graph.topics.values(), local, remote_topics, _advertised, _reading
         )
         self.topics.sync(publishers, subscribers)
@@ -194,7 +181,9 @@ class ZenohMirror:
         remote_nodes = self.graph.nodes()
         self.host.set_external_nodes(SOURCE, remote_nodes)
         self.host.claim_nodes(SOURCE, (remote_nodes | self._injected_nodes) - local)
-        self.services.sync(provided_by(self.host.graph.services, local), self.graph.services())
+        self.services.sync(
+            graph_mirror.provided_by(self.host.graph.services, local), self.graph.services()
+        )
 
 
 def _advertised(entry: TopicEntry, node: str) -> QosProfile:

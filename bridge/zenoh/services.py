@@ -21,14 +21,8 @@ from typing import Any
 
 import zenoh
 
+from bridge import graph_mirror
 from bridge.effects import Send
-from bridge.graph_mirror import (
-    StandIns,
-    WaitingCall,
-    called_endpoint,
-    control_payload,
-    waiting_call,
-)
 from bridge.host import PluginHost
 from bridge.zenoh.attachment import (
     Attachment,
@@ -43,7 +37,7 @@ from bridge.zenoh.node import Declared, ZenohNode
 from bridge.zenoh.problems import ProblemLog
 from schemas.codec_cdr import from_cdr, to_cdr
 from schemas.errors import SchemaError
-from schemas.values import Message
+from schemas.values import JsonObject, Message
 
 logger = logging.getLogger("bridge.zenoh")
 
@@ -83,14 +77,15 @@ class ZenohServices:
         self, host: PluginHost, node: ZenohNode, to_loop: ToLoop, problems: ProblemLog
     ) -> None:
         self._host, self._node, self._to_loop, self._problems = host, node, to_loop, problems
-        self.caller = host.connect_internal(node.fqn, self._caller_receives, peer="zenoh")
-        self.client_ids = {self.caller}
+        self.caller = graph_mirror.Caller(host, node.fqn, "zenoh", self._answered)
+        self.client_ids = {self.caller.client_id}
         self.servers: dict[str, _Server] = {}
         self.clients: dict[str, _Client] = {}
-        self.stand_ins = StandIns(host, self._stand_in_receives, "zenoh", self.client_ids)
-        self._from_zenoh: dict[str, _Waiting] = {}
-        self._to_zenoh: dict[tuple[str, int], WaitingCall] = {}  # by (service, sequence)
-        self._calls = itertools.count(1)
+        self.stand_ins = graph_mirror.StandIns(
+            host, self._stand_in_receives, "zenoh", self.client_ids
+        )
+        # (service, sequence) -> the call waiting for the server's reply
+        self._to_zenoh: dict[tuple[str, int], graph_mirror.WaitingCall] = {}
 
     # -- keeping in step ---------------------------------------------------------------------
 
@@ -157,10 +152,9 @@ class ZenohServices:
 
     def close(self) -> None:
         self.sync({}, {})
-        for waiting in self._from_zenoh.values():
+        for waiting in self.caller.waiting.values():
             waiting.query.drop()
-        self._from_zenoh.clear()
-        self._host.disconnect_internal(self.caller)
+        self.caller.close()
 
     # -- Zenoh clients calling local providers -----------------------------------------------
 
@@ -190,17 +184,10 @@ class ZenohServices:
         if server is None:
             query.drop()
             return
-        call_id = f"zenoh:{next(self._calls)}"
-        self._from_zenoh[call_id] = _Waiting(server, query, request)
-        self._host.send_op(
-            self.caller, {"op": "call_service", "service": name, "args": msg, "id": call_id}
-        )
+        self.caller.call(name, msg, _Waiting(server, query, request))
 
-    def _caller_receives(self, send: Send) -> None:
-        payload = control_payload(send)
-        waiting = self._from_zenoh.pop(str(payload.get("id")), None)
-        if payload.get("op") != "service_response" or waiting is None:
-            return
+    def _answered(self, waiting: _Waiting, payload: JsonObject) -> None:
+        """The local provider's `service_response` to a Zenoh query: the reply."""
         values = payload.get("values")
         try:
             if payload.get("result") is not True or not isinstance(values, dict):
@@ -221,11 +208,11 @@ class ZenohServices:
     # -- local callers using remote servers --------------------------------------------------
 
     def _stand_in_receives(self, send: Send) -> None:
-        payload = control_payload(send)
-        client = called_endpoint(self.clients, payload)
+        payload = graph_mirror.control_payload(send)
+        client = graph_mirror.called_endpoint(self.clients, payload)
         if client is None:
             return
-        waiting = waiting_call(send, payload)
+        waiting = graph_mirror.waiting_call(send, payload)
         args = payload.get("args")
         try:
             cdr = to_cdr(
