@@ -10,19 +10,18 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
-import json
-import sys
 from pathlib import Path
 
 import pytest
 
 from bridge.compose import run_bridge
 from bridge.config import BridgeConfig
-from bridge.dds.cyclone_xml import CycloneSettings, cyclone_xml
 from clients import RosbridgeClient
 from simulator.config import CameraConfig, LidarConfig, SceneConfig, SimConfig
 from simulator.node import serve
 from simulator.scene import build_scene
+from tests.graph_peers import RecordingService, cyclone_loopback_env, run_json_peer
+from tests.receiving import surge_speed_reaches
 
 pytestmark = pytest.mark.slow
 
@@ -37,26 +36,8 @@ LIGHT = SimConfig(
 
 async def run_peer(domain: int, *args: str, timeout_s: float = 90.0) -> dict:
     """Run ros2_peer.py in its own process with a loopback-only Cyclone configuration."""
-    env = {"CYCLONEDDS_URI": cyclone_xml(CycloneSettings(), tuned=False), "PATH": "/usr/bin"}
-    process = await asyncio.create_subprocess_exec(
-        sys.executable,
-        str(PEER),
-        str(domain),
-        *args,
-        env=env,
-        stdout=asyncio.subprocess.PIPE,
-        stderr=asyncio.subprocess.PIPE,
-    )
-    try:
-        async with asyncio.timeout(timeout_s):
-            out, err = await process.communicate()
-    finally:
-        if process.returncode is None:
-            process.kill()
-            await process.wait()
-    lines = [line for line in out.decode().splitlines() if line.startswith("{")]
-    assert process.returncode == 0 and lines, (out.decode(), err.decode()[-3000:])
-    return json.loads(lines[-1])
+    env = cyclone_loopback_env()
+    return await run_json_peer(PEER, str(domain), *args, env=env, timeout_s=timeout_s)
 
 
 async def test_independent_participant_reads_imu_and_steers_the_vessel(dds_domain, registry):
@@ -94,27 +75,11 @@ async def test_independent_participant_reads_imu_and_steers_the_vessel(dds_domai
     assert len({m["stamp_ns"] for m in messages}) == 5
 
 
-async def surge_speed_reaches(odom, target_mps: float, timeout_s: float) -> float:
-    """The vessel's surge speed from /odom once it reaches `target_mps`."""
-    speed = 0.0
-    async with asyncio.timeout(timeout_s):
-        async for item in odom:
-            speed = item.msg["twist"]["twist"]["linear"]["x"]
-            if speed >= target_mps:
-                return speed
-    return speed
-
-
 async def test_independent_participant_calls_a_service_a_client_provides(dds_domain, registry):
     """The service request/reply layout written independently in ros2_peer.py (rmw
     cyclonedds's header, `clientid` user data) meets the bridge's DDS service server."""
     config = BridgeConfig(host="127.0.0.1", port=0, dds=True, dds_domain=dds_domain)
-    requests = []
-
-    async def gate(args):
-        requests.append(args)
-        return {"success": True, "message": "lock gate opening"}
-
+    gate = RecordingService({"success": True, "message": "lock gate opening"})
     async with (
         run_bridge(config) as bridge,
         RosbridgeClient(bridge.url, registry=registry) as provider,
@@ -122,4 +87,4 @@ async def test_independent_participant_calls_a_service_a_client_provides(dds_dom
         await provider.advertise_service("/lock_gate", "std_srvs/srv/SetBool", gate)
         answer = await run_peer(dds_domain, "call", "/lock_gate", "60")
     assert answer == {"ok": True, "success": True, "message": "lock gate opening"}
-    assert requests == [{"data": True}]
+    assert gate.requests == [{"data": True}]

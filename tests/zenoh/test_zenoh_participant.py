@@ -20,6 +20,8 @@ from clients import RosbridgeClient
 from simulator.config import CameraConfig, LidarConfig, SceneConfig, SimConfig
 from simulator.node import serve
 from simulator.scene import build_scene
+from tests.graph_peers import RecordingService
+from tests.receiving import surge_speed_reaches
 from tests.zenoh.conftest import run_peer
 
 pytestmark = pytest.mark.slow
@@ -88,26 +90,10 @@ async def test_participant_sees_tokens_reads_imu_and_steers_the_vessel(
     assert ("MP", "%imu%data") in kinds and ("MS", "%cmd_wrench") in kinds
 
 
-async def surge_speed_reaches(odom, target_mps: float, timeout_s: float) -> float:
-    """The vessel's surge speed from /odom once it reaches `target_mps`."""
-    speed = 0.0
-    async with asyncio.timeout(timeout_s):
-        async for item in odom:
-            speed = item.msg["twist"]["twist"]["linear"]["x"]
-            if speed >= target_mps:
-                return speed
-    return speed
-
-
 async def test_participant_calls_a_service_a_client_provides(
     zenoh_domain, zenoh_endpoint, registry
 ):
-    requests = []
-
-    async def gate(args):
-        requests.append(args)
-        return {"success": True, "message": "lock gate opening"}
-
+    gate = RecordingService({"success": True, "message": "lock gate opening"})
     async with (
         run_bridge(zenoh_config(zenoh_domain, zenoh_endpoint)) as bridge,
         RosbridgeClient(bridge.url, registry=registry) as provider,
@@ -116,7 +102,7 @@ async def test_participant_calls_a_service_a_client_provides(
         result = await run_peer(zenoh_endpoint, zenoh_domain, "call", "/lock_gate", "30")
     assert result["success"] is True and result["message"] == "lock gate opening", result
     assert result["sequence"] == 7 and result["gid_echoed"] is True
-    assert requests == [{"data": True}]
+    assert gate.requests == [{"data": True}]
 
 
 async def test_bad_samples_are_dropped_with_one_line_each(
