@@ -19,8 +19,10 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING, Generic, Protocol, TypeVar
 
 from bridge.dds.qos import QosProfile, strongest
+from bridge.errors import BridgeError
 from bridge.host import PluginHost
 from bridge.outgoing import ControlMessage
+from schemas.errors import SchemaError
 from schemas.values import JsonObject, JsonValue, Message
 
 if TYPE_CHECKING:
@@ -54,6 +56,29 @@ class Arrival:
     msg: Message
     cdr: bytes
     sender_gid: bytes | None
+
+
+class Injection:
+    """Publishes the middleware's samples into the bridge as their remote node's. `active`
+    is True while it does, so that the mirror's own sink, which sees every message the
+    bridge publishes, does not send the sample back (no echo)."""
+
+    def __init__(self, host: PluginHost) -> None:
+        self._host = host
+        self.active = False
+
+    def publish(self, node: str, arrival: Arrival, latch: bool) -> str | None:
+        """Publish `arrival` as `node`'s; why the bridge refused it, or None."""
+        self.active = True
+        try:
+            self._host.publish_external(
+                node, arrival.topic, arrival.type_name, arrival.msg, arrival.cdr, latch=latch
+            )
+        except (BridgeError, SchemaError) as exc:
+            return str(exc)
+        finally:
+            self.active = False
+        return None
 
 
 class _Provided(Protocol):

@@ -44,9 +44,8 @@ from bridge.dds.participant import DdsParticipant, DdsPlumbing, Pump
 from bridge.dds.qos import QosError, QosProfile, advertised_profile, reader_profile
 from bridge.dds.service_mirror import ServiceMirror
 from bridge.dds.topic_mirror import TopicMirror
-from bridge.errors import BridgeError, DdsStartError
+from bridge.errors import DdsStartError
 from bridge.host import PluginHost
-from schemas.errors import SchemaError
 
 if TYPE_CHECKING:
     from bridge.context import Context
@@ -67,7 +66,7 @@ class DdsMirror:
         self.registry = host.registry
         self.view = DomainView()
         self.graph_sync = GraphSync()
-        self._injecting = False
+        self._injection = graph_mirror.Injection(host)
         self._waiting_first: dict[str, TopicMessage] = {}
         self._qos_warned: set[tuple[str, str]] = set()
         self._reconciler = graph_mirror.Reconciler(self.reconcile, logger, "DDS")
@@ -141,7 +140,7 @@ class DdsMirror:
 
     def accept(self, ctx: Context, message: TopicMessage, origin_node: str) -> None:
         """Every message published in the graph: send those of websocket clients to DDS."""
-        if self._injecting or origin_node not in self.local_nodes():
+        if self._injection.active or origin_node not in self.local_nodes():
             return
         if not self.topics.send(message) and not self.topics.refused(message.topic):
             self._waiting_first[message.topic] = message  # its writer is made next
@@ -162,16 +161,10 @@ class DdsMirror:
             if node is None or node in local:
                 node = participant_node(arrival.sender_gid or b"")
             latch = reader is not None and reader.wanted.profile.transient_local
-            self._injecting = True
-            try:
-                self.host.publish_external(
-                    node, arrival.topic, arrival.type_name, arrival.msg, arrival.cdr, latch=latch
-                )
-            except (BridgeError, SchemaError) as exc:
-                logger.warning("DDS: sample on %s not published: %s", arrival.topic, exc)
+            problem = self._injection.publish(node, arrival, latch)
+            if problem is not None:
+                logger.warning("DDS: sample on %s not published: %s", arrival.topic, problem)
                 continue
-            finally:
-                self._injecting = False
             self.graph_sync.noted_publisher(arrival.topic, node)
 
     # -- discovery ---------------------------------------------------------------------------

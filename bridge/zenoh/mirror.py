@@ -26,7 +26,7 @@ from bridge import graph_mirror
 from bridge.dds.discovery import RemoteTopic
 from bridge.dds.graph_sync import GraphSync
 from bridge.dds.qos import QosProfile, advertised_profile, reader_profile
-from bridge.errors import BridgeError, ZenohStartError
+from bridge.errors import ZenohStartError
 from bridge.host import PluginHost
 from bridge.zenoh.graph import ZenohGraph
 from bridge.zenoh.liveliness import ADMIN_SPACE, TokenProblem
@@ -35,7 +35,6 @@ from bridge.zenoh.problems import ProblemLog
 from bridge.zenoh.services import ZenohServices
 from bridge.zenoh.session import ZenohSettings, open_session
 from bridge.zenoh.topics import ZenohTopics
-from schemas.errors import SchemaError
 
 if TYPE_CHECKING:
     from bridge.context import Context
@@ -55,7 +54,7 @@ class ZenohMirror:
         self.config = host.config
         self.problems = ProblemLog(logger)
         self.graph_sync = GraphSync()
-        self._injecting = False
+        self._injection = graph_mirror.Injection(host)
         self._injected_nodes: set[str] = set()
         self._waiting_first: dict[str, TopicMessage] = {}
         self._remote_topics: dict[str, RemoteTopic] = {}  # as of the last reconcile
@@ -112,7 +111,7 @@ class ZenohMirror:
 
     def accept(self, ctx: Context, message: TopicMessage, origin_node: str) -> None:
         """Every message published in the graph: send clients' (and other graphs') out."""
-        if self._injecting or origin_node not in self.local_nodes():
+        if self._injection.active or origin_node not in self.local_nodes():
             return
         if not self.topics.send(message):
             self._waiting_first[message.topic] = message  # its publisher is made next
@@ -129,16 +128,10 @@ class ZenohMirror:
         node = self._publisher_node(arrival)
         subscriber = self.topics.subscribers.get(arrival.topic)
         latch = subscriber is not None and subscriber.wanted.profile.transient_local
-        self._injecting = True
-        try:
-            self.host.publish_external(
-                node, arrival.topic, arrival.type_name, arrival.msg, arrival.cdr, latch=latch
-            )
-        except (BridgeError, SchemaError) as exc:
-            self.problems.dropped(arrival.topic, "sample not published", str(exc))
+        problem = self._injection.publish(node, arrival, latch)
+        if problem is not None:
+            self.problems.dropped(arrival.topic, "sample not published", problem)
             return
-        finally:
-            self._injecting = False
         self.graph_sync.noted_publisher(arrival.topic, node)
         if node not in self._injected_nodes:
             self._injected_nodes.add(node)
