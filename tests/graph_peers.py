@@ -19,8 +19,19 @@ from pathlib import Path
 from typing import Any
 
 from bridge.dds.cyclone_xml import CycloneSettings, cyclone_xml
+from clients.subscription import Subscription
+from simulator.config import CameraConfig, LidarConfig, SceneConfig, SimConfig
+from simulator.node import serve
+from simulator.scene import build_scene
+from tests.receiving import surge_speed_reaches
 
 PEER_TIMEOUT_S = 90.0  # a peer's whole run, discovery on a loaded 2-core machine included
+# Coarse terrain and a sparse LIDAR keep the simulator light on two shared cores.
+LIGHT_SIM = SimConfig(
+    scene=SceneConfig(terrain_cells=80, trees=10, houses=3),
+    lidar=LidarConfig(horizontal_resolution_deg=2.0, vertical_resolution_deg=2.0, rate_hz=4.0),
+    camera=CameraConfig(width_px=160, height_px=120, rate_hz=4.0),
+)
 
 
 def cyclone_loopback_env() -> dict[str, str]:
@@ -92,3 +103,30 @@ class RecordingService:
     async def __call__(self, args: dict[str, Any]) -> dict[str, Any]:
         self.requests.append(args)
         return self.answer
+
+
+@contextlib.asynccontextmanager
+async def light_simulator(url: str) -> AsyncIterator[None]:
+    """The simulator (`LIGHT_SIM`) publishing its sensors to the bridge at `url` and taking
+    its commands for the block; stopped after."""
+    scene = await asyncio.to_thread(build_scene, LIGHT_SIM.scene, seed=LIGHT_SIM.seed)
+    stop = asyncio.Event()
+    sim = asyncio.create_task(serve(url, LIGHT_SIM, stop, scene=scene))
+    try:
+        yield
+    finally:
+        stop.set()
+        await sim
+
+
+async def speed_while_steering(
+    steering: asyncio.Task[Any], odom: Subscription, target_mps: float, timeout_s: float
+) -> float:
+    """The vessel's surge speed once it reaches `target_mps` while a peer steers it
+    (`steering`, its run); a peer that ends first has failed, and fails the test with its
+    output."""
+    moving = asyncio.create_task(surge_speed_reaches(odom, target_mps, timeout_s=timeout_s))
+    await asyncio.wait({moving, steering}, return_when=asyncio.FIRST_COMPLETED)
+    if steering.done():
+        steering.result()
+    return await moving

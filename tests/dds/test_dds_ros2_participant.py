@@ -17,21 +17,17 @@ import pytest
 from bridge.compose import run_bridge
 from bridge.config import BridgeConfig
 from clients import RosbridgeClient
-from simulator.config import CameraConfig, LidarConfig, SceneConfig, SimConfig
-from simulator.node import serve
-from simulator.scene import build_scene
-from tests.graph_peers import RecordingService, cyclone_loopback_env, run_json_peer
-from tests.receiving import surge_speed_reaches
+from tests.graph_peers import (
+    RecordingService,
+    cyclone_loopback_env,
+    light_simulator,
+    run_json_peer,
+    speed_while_steering,
+)
 
 pytestmark = pytest.mark.slow
 
 PEER = Path(__file__).resolve().parent / "ros2_peer.py"
-# Coarse terrain and a sparse LIDAR keep the simulator light on two shared cores.
-LIGHT = SimConfig(
-    scene=SceneConfig(terrain_cells=80, trees=10, houses=3),
-    lidar=LidarConfig(horizontal_resolution_deg=2.0, vertical_resolution_deg=2.0, rate_hz=4.0),
-    camera=CameraConfig(width_px=160, height_px=120, rate_hz=4.0),
-)
 
 
 async def run_peer(domain: int, *args: str, timeout_s: float = 90.0) -> dict:
@@ -41,30 +37,20 @@ async def run_peer(domain: int, *args: str, timeout_s: float = 90.0) -> dict:
 
 
 async def test_independent_participant_reads_imu_and_steers_the_vessel(dds_domain, registry):
-    scene = await asyncio.to_thread(build_scene, LIGHT.scene, seed=LIGHT.seed)
-    stop = asyncio.Event()
     config = BridgeConfig(host="127.0.0.1", port=0, dds=True, dds_domain=dds_domain)
     async with (
         run_bridge(config) as bridge,
         RosbridgeClient(bridge.url, registry=registry) as watcher,
     ):
         odom = await watcher.subscribe("/odom", "nav_msgs/msg/Odometry", maxsize=1)
-        sim = asyncio.create_task(serve(bridge.url, LIGHT, stop, scene=scene))
-        try:
+        async with light_simulator(bridge.url):
             imu = asyncio.create_task(run_peer(dds_domain, "imu", "5", "60"))
             steering = asyncio.create_task(run_peer(dds_domain, "wrench", "40", "3000"))
-            moving = asyncio.create_task(surge_speed_reaches(odom, 0.5, timeout_s=60.0))
-            await asyncio.wait({moving, steering}, return_when=asyncio.FIRST_COMPLETED)
-            if steering.done():
-                steering.result()  # the peer failed: its output is in the assertion
-            speed = await moving
+            speed = await speed_while_steering(steering, odom, 0.5, timeout_s=60.0)
             imu_result = await imu
             steering.cancel()
             with contextlib.suppress(asyncio.CancelledError):
                 await steering
-        finally:
-            stop.set()
-            await sim
     assert speed >= 0.5
     messages = imu_result["messages"]
     assert len(messages) == 5
