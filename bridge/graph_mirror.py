@@ -4,8 +4,8 @@ A mirror joins the bridge's graph to an external one through its `PluginHost`. W
 speaks for, how often it brings the middleware in step, which topics want a writer or a reader
 and with what QoS, how the middleware's requests reach local providers (the mirror's own
 client) and how remote servers' services appear in the bridge (a stand-in client named like
-the remote node) do not depend on DDS or Zenoh: they are written here once, and
-each mirror supplies only what its middleware does differently.
+the remote node) do not depend on DDS or Zenoh: they are written here once, and each mirror
+supplies only what its middleware does differently.
 """
 
 from __future__ import annotations
