@@ -24,25 +24,18 @@ import argparse
 import asyncio
 import contextlib
 import json
-import os
 import random
 import statistics
 import subprocess
 import sys
-import time
 from collections.abc import Iterator
 
-import numpy as np
-import websockets
-
-from schemas import codec_cbor
-from schemas.pointcloud import pack_points
+from benchmarks.sensor_ages import POINT_STEP, load, publish, read_ages, summary
 from schemas.runtime.process import MALLOC_ENV as TUNED_MALLOC
 from tests.child_process import Running, repo_env
 from tests.dds.dds_netns import Host, LinkShape, bridge_argv, shape_link, two_hosts, why_not
 
 SCAN_POINTS = 345_600  # Table 4.3: 1440 x 240 rays at 0.25 degrees
-POINT_STEP = 16  # x, y, z, intensity float32
 SCAN_HZ, IMU_HZ = 2.0, 50.0
 WARMUP_S = 4.0  # discovery and first-message set-up are not what is measured
 LISTENING = r"listening on ws://127\.0\.0\.1:(?P<port>\d+)"
@@ -51,84 +44,6 @@ CASES = ("one-bridge", "dds-lo", "dds-veth", "dds-wlan")
 # throughput on a good 2x2 link, a couple of milliseconds of air time and retries.
 WLAN = LinkShape(rate_mbit=150.0, delay_ms=2.0, jitter_ms=1.0, loss_percent=0.1)
 EXTRA_BRIDGE_ARGS: list[str] = []  # --untuned adds --dds-untuned
-
-
-# -- the two clients (run as `--role pub|sub`, possibly inside a namespace) --------------------
-
-
-def stamp(ns: int) -> dict:
-    return {"sec": ns // 1_000_000_000, "nanosec": ns % 1_000_000_000}
-
-
-def scan_message(cloud: dict, now_ns: int) -> dict:
-    """`cloud` (`schemas.pointcloud.pack_points`, packed once) stamped `now_ns`."""
-    return {**cloud, "header": {"stamp": stamp(now_ns), "frame_id": "lidar"}}
-
-
-def imu_message(now_ns: int) -> dict:
-    return {
-        "header": {"stamp": stamp(now_ns), "frame_id": "imu"},
-        "linear_acceleration": {"x": 0.0, "y": 0.0, "z": 9.80665},
-    }
-
-
-async def publish(url: str, seconds: float) -> dict:
-    """Scans at SCAN_HZ and IMU at IMU_HZ for `seconds`, each stamped just before encoding."""
-    sent = {"scan": 0, "imu": 0}
-    points = np.random.default_rng(0).random((SCAN_POINTS, 4), dtype=np.float32)
-    cloud = pack_points(points, 0, "lidar")  # x, y, z, intensity float32
-    async with websockets.connect(url, max_size=None, compression=None) as ws:
-        for topic, type_name in (
-            ("/lidar/points", "sensor_msgs/msg/PointCloud2"),
-            ("/imu/data", "sensor_msgs/msg/Imu"),
-        ):
-            await ws.send(json.dumps({"op": "advertise", "topic": topic, "type": type_name}))
-        end = time.monotonic() + seconds
-
-        async def stream(topic: str, hz: float, make, key: str) -> None:
-            next_at = time.monotonic()
-            while next_at < end:
-                msg = make(time.time_ns())
-                await ws.send(codec_cbor.dumps({"op": "publish", "topic": topic, "msg": msg}))
-                sent[key] += 1
-                next_at += 1.0 / hz
-                await asyncio.sleep(max(0.0, next_at - time.monotonic()))
-
-        await asyncio.gather(
-            stream("/lidar/points", SCAN_HZ, lambda t: scan_message(cloud, t), "scan"),
-            stream("/imu/data", IMU_HZ, imu_message, "imu"),
-        )
-    return {"sent": sent}
-
-
-async def subscribe(url: str, seconds: float, warmup_s: float) -> dict:
-    """Ages (ms) of what arrives during `seconds` after the first `warmup_s`."""
-    ages: dict[str, list[float]] = {"scan": [], "imu": []}
-    start_ns = time.time_ns() + int(warmup_s * 1e9)
-    async with websockets.connect(url, max_size=None, compression=None) as ws:
-        for topic, type_name in (
-            ("/lidar/points", "sensor_msgs/msg/PointCloud2"),
-            ("/imu/data", "sensor_msgs/msg/Imu"),
-        ):
-            await ws.send(
-                json.dumps(
-                    {"op": "subscribe", "topic": topic, "type": type_name, "compression": "cbor"}
-                )
-            )
-        print("subscribed", flush=True)
-        with contextlib.suppress(TimeoutError):
-            async with asyncio.timeout(warmup_s + seconds + 5.0):
-                async for frame in ws:
-                    now = time.time_ns()
-                    op = codec_cbor.loads(frame) if isinstance(frame, bytes) else json.loads(frame)
-                    header = op.get("msg", {}).get("header", {}).get("stamp")
-                    if op.get("op") != "publish" or header is None:
-                        continue
-                    sent_ns = header["sec"] * 1_000_000_000 + header["nanosec"]
-                    if sent_ns >= start_ns:
-                        key = "scan" if op["topic"] == "/lidar/points" else "imu"
-                        ages[key].append((now - sent_ns) / 1e6)
-    return ages
 
 
 # -- the driver -------------------------------------------------------------------------------
@@ -201,25 +116,6 @@ def run_case(case: str, seconds: float, shape: LinkShape) -> tuple[dict, str]:
             return run_clients(url_a, url_b, seconds, a, b), f"domain {domain}, {link}"
 
 
-def summary(ages: list[float], expected: int) -> str:
-    if not ages:
-        return f"nothing received (expected {expected})"
-    ordered = sorted(ages)
-
-    def pct(p: float) -> float:
-        return ordered[min(len(ordered) - 1, int(p * len(ordered)))]
-
-    return (
-        f"median {statistics.median(ordered):7.1f}  p90 {pct(0.9):7.1f}  "
-        f"p99 {pct(0.99):7.1f}  max {ordered[-1]:7.1f} ms  n {len(ordered)} of "
-        f"{expected}"
-    )
-
-
-def load() -> str:
-    return "load " + " ".join(f"{x:.2f}" for x in os.getloadavg())
-
-
 def drive(cases: list[str], seconds: float, shape: LinkShape) -> None:
     print(
         f"{SCAN_POINTS:,}-point scan ({SCAN_POINTS * POINT_STEP:,} B) at {SCAN_HZ:g} Hz + "
@@ -270,10 +166,13 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--url", help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.role == "pub":
-        print(json.dumps(asyncio.run(publish(args.url, args.seconds))))
+        print(
+            json.dumps(asyncio.run(publish(args.url, args.seconds, SCAN_POINTS, SCAN_HZ, IMU_HZ)))
+        )
         return 0
     if args.role == "sub":
-        print(json.dumps(asyncio.run(subscribe(args.url, args.seconds, WARMUP_S))))
+        ages = read_ages(args.url, args.seconds, WARMUP_S, grace_s=5.0)
+        print(json.dumps(asyncio.run(ages)))
         return 0
     if args.untuned:
         EXTRA_BRIDGE_ARGS.append("--dds-untuned")

@@ -26,7 +26,6 @@ import argparse
 import asyncio
 import contextlib
 import json
-import os
 import random
 import statistics
 import sys
@@ -35,12 +34,8 @@ import time
 from collections.abc import Iterator
 from pathlib import Path
 
-import numpy as np
-import websockets
-
+from benchmarks.sensor_ages import TOPICS, key_of, load, publish, read_ages, summary
 from clients.linkemu import LinkEmulator, profile_named
-from schemas import codec_cbor
-from schemas.pointcloud import pack_points
 from schemas.runtime.process import MALLOC_ENV as TUNED_MALLOC
 from tests.child_process import Running, free_port, repo_env
 
@@ -50,76 +45,15 @@ IMU_HZ, SCAN_HZ = 50.0, 2.0
 SCAN_POINTS = 43_200
 WARMUP_S = 4.0  # connection, discovery and the first scan are not what is measured
 LISTENING = r"listening on ws://127\.0\.0\.1:(?P<port>\d+)"
-TOPICS = (("/lidar/points", "sensor_msgs/msg/PointCloud2"), ("/imu/data", "sensor_msgs/msg/Imu"))
-
-
-def stamp(ns: int) -> dict:
-    return {"sec": ns // 1_000_000_000, "nanosec": ns % 1_000_000_000}
 
 
 # -- the roles (each its own process) --------------------------------------------------------
 
 
-async def publish(url: str, seconds: float, scan_points: int) -> dict:
-    """Scans at SCAN_HZ and IMU at IMU_HZ for `seconds`, each stamped just before encoding."""
-    sent = {"scan": 0, "imu": 0}
-    points = np.random.default_rng(0).random((scan_points, 4), dtype=np.float32)
-    cloud = pack_points(points, 0, "lidar")
-    async with websockets.connect(url, max_size=None, compression=None) as ws:
-        for topic, type_name in TOPICS:
-            await ws.send(json.dumps({"op": "advertise", "topic": topic, "type": type_name}))
-        end = time.monotonic() + seconds
-
-        async def stream(topic: str, hz: float, key: str) -> None:
-            next_at = time.monotonic()
-            while next_at < end:
-                now = time.time_ns()
-                header = {"stamp": stamp(now), "frame_id": key}
-                msg = (
-                    {**cloud, "header": header}
-                    if key == "scan"
-                    else {"header": header, "linear_acceleration": {"z": 9.80665}}
-                )
-                await ws.send(codec_cbor.dumps({"op": "publish", "topic": topic, "msg": msg}))
-                sent[key] += 1
-                next_at += 1.0 / hz
-                await asyncio.sleep(max(0.0, next_at - time.monotonic()))
-
-        await asyncio.gather(
-            stream("/lidar/points", SCAN_HZ, "scan"), stream("/imu/data", IMU_HZ, "imu")
-        )
-    return {"sent": sent}
-
-
-def key_of(topic: str) -> str:
-    return "scan" if topic == "/lidar/points" else "imu"
-
-
-async def read_websocket(url: str, seconds: float) -> dict:
-    """Ages (ms) of what arrives during `seconds` after WARMUP_S, through the link."""
-    ages: dict[str, list[float]] = {"scan": [], "imu": []}
-    start_ns = time.time_ns() + int(WARMUP_S * 1e9)
-    async with websockets.connect(url, max_size=None, compression=None) as ws:
-        for topic, type_name in TOPICS:
-            op = {"op": "subscribe", "topic": topic, "type": type_name, "compression": "cbor"}
-            await ws.send(json.dumps({**op, "queue_length": 1}))
-        print("subscribed", flush=True)
-        with contextlib.suppress(TimeoutError):
-            async with asyncio.timeout(WARMUP_S + seconds):
-                async for frame in ws:
-                    now = time.time_ns()
-                    op = codec_cbor.loads(frame) if isinstance(frame, bytes) else json.loads(frame)
-                    header = op.get("msg", {}).get("header", {}).get("stamp")
-                    if op.get("op") != "publish" or header is None:
-                        continue
-                    sent_ns = header["sec"] * 1_000_000_000 + header["nanosec"]
-                    if sent_ns >= start_ns:
-                        ages[key_of(op["topic"])].append((now - sent_ns) / 1e6)
-    return ages
-
-
 def read_zenoh(endpoint: str, domain: int, seconds: float) -> dict:
-    """The same through a plain Zenoh peer (rmw_zenoh keys, rosbags CDR)."""
+    """Ages (ms) of what arrives during `seconds` after WARMUP_S, through the link, read by a
+    plain Zenoh peer (rmw_zenoh keys, rosbags CDR); the websocket reader is
+    `sensor_ages.read_ages`."""
     import zenoh
     from rosbags.typesys import Stores, get_typestore
 
@@ -228,21 +162,6 @@ async def one_case(
         return ages, link.stats.carried_bytes["to_client"]
 
 
-def summary(ages: list[float], expected: int) -> str:
-    if not ages:
-        return f"nothing received (of {expected} sent)"
-    ordered = sorted(ages)
-    p90 = ordered[min(len(ordered) - 1, int(0.9 * len(ordered)))]
-    return (
-        f"median {statistics.median(ordered):8.1f}  p90 {p90:8.1f}  max {ordered[-1]:8.1f} ms"
-        f"  n {len(ordered):4d} of {expected}"
-    )
-
-
-def load() -> str:
-    return "load " + " ".join(f"{x:.2f}" for x in os.getloadavg())
-
-
 async def drive(args: argparse.Namespace) -> None:
     domain, zenoh_port = random.randint(100, 230), free_port()
     scan_bytes = args.scan_points * 16
@@ -301,9 +220,11 @@ def main(argv: list[str] | None = None) -> int:
         except KeyError as exc:
             parser.error(str(exc))
     if args.role == "publish":
-        print(json.dumps(asyncio.run(publish(args.url, args.seconds, args.scan_points))))
+        sent = publish(args.url, args.seconds, args.scan_points, SCAN_HZ, IMU_HZ)
+        print(json.dumps(asyncio.run(sent)))
     elif args.role == "websocket":
-        print(json.dumps(asyncio.run(read_websocket(args.url, args.seconds))))
+        ages = read_ages(args.url, args.seconds, WARMUP_S, queue_length=1)
+        print(json.dumps(asyncio.run(ages)))
     elif args.role == "zenoh":
         print(json.dumps(read_zenoh(args.endpoint, args.domain, args.seconds)))
     else:

@@ -32,3 +32,15 @@ async def drain(sub: Subscription, seconds: float) -> list[dict[str, Any]]:
             async for item in sub:
                 received.append(item.msg)
     return received
+
+
+async def surge_speed_reaches(odom: Subscription, target_mps: float, timeout_s: float) -> float:
+    """The vessel's surge speed from `/odom` (nav_msgs/msg/Odometry) once it reaches
+    `target_mps`; the last one seen if it does not in `timeout_s`."""
+    speed = 0.0
+    async with asyncio.timeout(timeout_s):
+        async for item in odom:
+            speed = item.msg["twist"]["twist"]["linear"]["x"]
+            if speed >= target_mps:
+                return speed
+    return speed

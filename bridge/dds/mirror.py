@@ -13,20 +13,20 @@ What goes where:
   ignores what it injected itself and whatever the bridge publishes on its own account, and
   its readers ignore the participant's own writers, so nothing echoes and a message crosses
   each bridge once however many bridges share a domain;
-- every `RECONCILE_S` (and soon after a discovery change or a first message) the endpoints
-  are brought in step with the graph: topics clients publish get writers, topics clients
-  subscribe to get readers, client-provided services get DDS servers, remote services get
-  stand-ins, remote endpoints appear in the graph.
+- every `graph_mirror.RECONCILE_S` (and soon after a discovery change or a first message)
+  the endpoints are brought in step with the graph: topics clients publish get writers,
+  topics clients subscribe to get readers, client-provided services get DDS servers, remote
+  services get stand-ins, remote endpoints appear in the graph.
 """
 
 from __future__ import annotations
 
 import asyncio
-import contextlib
 import logging
 from collections.abc import Callable
 from typing import TYPE_CHECKING
 
+from bridge import graph_mirror
 from bridge.dds.action_mirror import ActionMirror
 from bridge.dds.announce import Announcer
 from bridge.dds.cyclone_xml import CycloneSettings
@@ -41,18 +41,11 @@ from bridge.dds.graph_sync import GraphSync
 from bridge.dds.outbox import Outbox, WriterThread
 from bridge.dds.param_node import ParamNode
 from bridge.dds.participant import DdsParticipant, DdsPlumbing, Pump
-from bridge.dds.qos import (
-    QosError,
-    QosProfile,
-    advertised_profile,
-    reader_profile,
-    strongest,
-)
+from bridge.dds.qos import QosError, QosProfile, advertised_profile, reader_profile
 from bridge.dds.service_mirror import ServiceMirror
-from bridge.dds.topic_mirror import Arrival, TopicMirror, Wanted
-from bridge.errors import BridgeError, DdsStartError
+from bridge.dds.topic_mirror import TopicMirror
+from bridge.errors import DdsStartError
 from bridge.host import PluginHost
-from schemas.errors import SchemaError
 
 if TYPE_CHECKING:
     from bridge.context import Context
@@ -61,7 +54,6 @@ if TYPE_CHECKING:
 
 logger = logging.getLogger("bridge.dds")
 
-RECONCILE_S = 0.1  # how late a new advertisement or subscription reaches DDS at most
 EXTERNAL_SOURCE = "dds"  # the name of the domain's nodes in rosapi's view of other graphs
 
 
@@ -74,11 +66,10 @@ class DdsMirror:
         self.registry = host.registry
         self.view = DomainView()
         self.graph_sync = GraphSync()
-        self._injecting = False
+        self._injection = graph_mirror.Injection(host)
         self._waiting_first: dict[str, TopicMessage] = {}
         self._qos_warned: set[tuple[str, str]] = set()
-        self._task: asyncio.Task[None] | None = None
-        self._wake = asyncio.Event()
+        self._reconciler = graph_mirror.Reconciler(self.reconcile, logger, "DDS")
 
     async def start(self) -> None:
         loop = self._loop = asyncio.get_running_loop()
@@ -102,7 +93,7 @@ class DdsMirror:
         self.host.add_sink(self)
         self.writer.start()
         self.pump.start()
-        self._task = asyncio.create_task(self._reconcile_forever(), name="bridge-dds")
+        self._reconciler.start("bridge-dds")
         logger.info(
             "DDS: domain %d on interface %s (peers %s, multicast %s) as node %s",
             self.config.dds_domain,
@@ -132,10 +123,7 @@ class DdsMirror:
             self.pump.watch(condition, self._take_discovery)
 
     async def stop(self) -> None:
-        if self._task is not None:
-            self._task.cancel()
-            with contextlib.suppress(asyncio.CancelledError):
-                await self._task
+        await self._reconciler.stop()
         self.host.remove_sink(self)
         self.pump.stop()
         self.writer.stop()
@@ -152,39 +140,31 @@ class DdsMirror:
 
     def accept(self, ctx: Context, message: TopicMessage, origin_node: str) -> None:
         """Every message published in the graph: send those of websocket clients to DDS."""
-        if self._injecting or origin_node not in self.local_nodes():
+        if self._injection.active or origin_node not in self.local_nodes():
             return
         if not self.topics.send(message) and not self.topics.refused(message.topic):
             self._waiting_first[message.topic] = message  # its writer is made next
-            self._wake.set()
+            self._reconciler.wake()
 
     def local_nodes(self) -> set[str]:
         """Nodes of the websocket clients (not the mirror's own in-process clients) and, as a
         gateway, those other graphs' plug-ins speak for (`PluginHost.gateway_nodes`)."""
-        own = self.services.client_ids
-        clients = {s.node for s in self.host.clients().values() if s.client_id not in own}
-        return clients | self.host.gateway_nodes(EXTERNAL_SOURCE)
+        return graph_mirror.mirrored_nodes(self.host, self.services.client_ids, EXTERNAL_SOURCE)
 
     # -- the domain's messages in ------------------------------------------------------------
 
-    def _inject(self, arrivals: list[Arrival]) -> None:
+    def _inject(self, arrivals: list[graph_mirror.Arrival]) -> None:
         local = self.local_nodes()
         for arrival in arrivals:
             reader = self.topics.readers.get(arrival.topic)
-            node = self.view.writer_node(arrival.writer_guid)
+            node = self.view.writer_node(arrival.sender_gid)
             if node is None or node in local:
-                node = participant_node(arrival.writer_guid or b"")
+                node = participant_node(arrival.sender_gid or b"")
             latch = reader is not None and reader.wanted.profile.transient_local
-            self._injecting = True
-            try:
-                self.host.publish_external(
-                    node, arrival.topic, arrival.type_name, arrival.msg, arrival.cdr, latch=latch
-                )
-            except (BridgeError, SchemaError) as exc:
-                logger.warning("DDS: sample on %s not published: %s", arrival.topic, exc)
+            problem = self._injection.publish(node, arrival, latch)
+            if problem is not None:
+                logger.warning("DDS: sample on %s not published: %s", arrival.topic, problem)
                 continue
-            finally:
-                self._injecting = False
             self.graph_sync.noted_publisher(arrival.topic, node)
 
     # -- discovery ---------------------------------------------------------------------------
@@ -199,31 +179,27 @@ class DdsMirror:
 
     def _snapshot_seen(self, snapshot: Snapshot) -> None:
         self.view.update_snapshot(snapshot)
-        self._wake.set()
+        self._reconciler.wake()
 
     def _nodes_seen(self, participant: bytes, nodes: tuple[NodeEntities, ...]) -> None:
         self.view.update_nodes(participant, nodes)
-        self._wake.set()
+        self._reconciler.wake()
 
     # -- keeping DDS in step with the graph --------------------------------------------------
-
-    async def _reconcile_forever(self) -> None:
-        while True:
-            try:
-                self.reconcile()
-            except Exception:  # a bug here must not end the mirror
-                logger.exception("DDS: reconcile failed")
-            with contextlib.suppress(TimeoutError):
-                async with asyncio.timeout(RECONCILE_S):
-                    await self._wake.wait()
-            self._wake.clear()
 
     def reconcile(self) -> None:
         """Bring writers, readers, services and the graph's remote half in step."""
         graph = self.host.graph
         local = self.local_nodes()
         remote_topics = self.view.topics()
-        writers, readers = self._wanted_topics(local, remote_topics)
+        writers, readers = graph_mirror.wanted_topics(
+            graph.topics.values(),
+            local,
+            remote_topics,
+            self._advertised,
+            self._reading,
+            readers_for=local | {self.actions.node},
+        )
         self.topics.sync(writers, readers)
         for message in self._waiting_first.values():
             self.topics.send(message)
@@ -231,17 +207,8 @@ class DdsMirror:
         self.graph_sync.apply(self.host, remote_topics, local)
         self.host.set_external_nodes(EXTERNAL_SOURCE, self.view.announced_nodes())
         self.host.claim_nodes(EXTERNAL_SOURCE, self._domain_nodes(remote_topics, local))
-        provided = {
-            name: entry.type_name
-            for name, entry in graph.services.items()
-            if entry.provider in local and entry.type_name
-        }
-        self.services.sync(provided, self.view.services())
-        local_actions = {
-            name: entry.type_name
-            for name, entry in graph.actions.items()
-            if entry.provider in local and entry.type_name
-        }
+        self.services.sync(graph_mirror.provided_by(graph.services, local), self.view.services())
+        local_actions = graph_mirror.provided_by(graph.actions, local)
         self.actions.sync(self.view.actions(), set(self.services.clients), set(local_actions))
         self.actions.sync_local(local_actions)
         topic_readers, topic_writers = self.topics.endpoint_guids()
@@ -259,26 +226,6 @@ class DdsMirror:
         injected = {node for _, node in self.graph_sync.publishers}
         serving = {s.node for s in self.view.services().values()}
         return (listed | injected | serving | set(self.view.announced_nodes())) - local
-
-    def _wanted_topics(
-        self,
-        local: set[str],
-        remote: dict[str, RemoteTopic],
-    ) -> tuple[dict[str, Wanted], dict[str, Wanted]]:
-        writers: dict[str, Wanted] = {}
-        readers: dict[str, Wanted] = {}
-        for entry in self.host.graph.topics.values():
-            if entry.type_name is None:
-                continue
-            publishing = [node for node in entry.publishers if node in local]
-            if publishing:
-                profiles = [self._advertised(entry, node) for node in publishing]
-                writers[entry.name] = Wanted(entry.type_name, strongest(profiles))
-            if any(node in local or node == self.actions.node for node in entry.subscribers):
-                seen = remote.get(entry.name)
-                offered = [p for ps in seen.publishers.values() for p in ps] if seen else []
-                readers[entry.name] = Wanted(entry.type_name, self._reading(entry, offered))
-        return writers, readers
 
     def _reading(self, entry: TopicEntry, offered: list[QosProfile]) -> QosProfile:
         """The reader profile: adapted to the writers, or as the subscribers' `qos` asks."""

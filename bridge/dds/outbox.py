@@ -96,11 +96,19 @@ class Outbox:
 
 
 class WriterThread:
-    """Runs the outbox's jobs until it is closed."""
+    """Runs the outbox's jobs on one thread until it is closed; a failing job is logged as
+    `failure` and ends nothing (one unwritable message, a publisher just closed)."""
 
-    def __init__(self, outbox: Outbox) -> None:
+    def __init__(
+        self,
+        outbox: Outbox,
+        name: str = "bridge-dds-writer",
+        failure: str = "DDS: a write failed",
+        log: logging.Logger = logger,
+    ) -> None:
         self.outbox = outbox
-        self._thread = threading.Thread(target=self._run, name="bridge-dds-writer", daemon=True)
+        self._failure, self._log = failure, log
+        self._thread = threading.Thread(target=self._run, name=name, daemon=True)
 
     def start(self) -> None:
         self._thread.start()
@@ -117,5 +125,5 @@ class WriterThread:
                 continue
             try:
                 job()
-            except Exception:  # one unwritable message must not end the writer
-                logger.exception("DDS: a write failed")
+            except Exception:
+                self._log.exception(self._failure)

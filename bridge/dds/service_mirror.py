@@ -20,15 +20,15 @@ import logging
 from collections.abc import Callable
 from typing import TypeVar
 
+from bridge import graph_mirror
 from bridge.dds.discovery import RemoteService
 from bridge.dds.participant import DdsPlumbing
 from bridge.dds.request_header import RequestId
 from bridge.dds.service_endpoints import Received, ServiceClient, ServiceServer
 from bridge.effects import Send
 from bridge.host import PluginHost
-from bridge.outgoing import ControlMessage
 from schemas.errors import SchemaError
-from schemas.values import JsonObject, JsonValue, Message
+from schemas.values import JsonObject, Message
 
 logger = logging.getLogger("bridge.dds")
 
@@ -48,16 +48,16 @@ class ServiceMirror:
     ) -> None:
         self._host = host
         self._dds, self._to_loop = dds, to_loop
-        self.caller = host.connect_internal(node, self._caller_receives, peer="dds")
-        self.client_ids = {self.caller}
+        self.caller = graph_mirror.Caller(host, node, "dds", self._answered)
+        self.client_ids = {self.caller.client_id}
         self.servers: dict[str, ServiceServer] = {}
         self.clients: dict[str, ServiceClient] = {}
-        self.stand_ins: dict[str, int] = {}  # remote node -> its stand-in client id
+        self.stand_ins = graph_mirror.StandIns(
+            host, self._stand_in_receives, "dds", self.client_ids
+        )
         self._remote: dict[str, RemoteService] = {}
-        self._from_dds: dict[str, tuple[ServiceServer, RequestId]] = {}
-        # (service, sequence) -> (stand-in, the provider's request id, the service's spelling)
-        self._to_dds: dict[tuple[str, int], tuple[int, JsonValue, JsonValue]] = {}
-        self._calls = 0
+        # (service, sequence) -> the call waiting for the server's reply
+        self._to_dds: dict[tuple[str, int], graph_mirror.WaitingCall] = {}
         self._refused: set[str] = set()
 
     # -- keeping in step ---------------------------------------------------------------------
@@ -107,30 +107,16 @@ class ServiceMirror:
 
     def _adopt(self, service: RemoteService) -> bool:
         """Advertise a remote server's service through a stand-in named like its node."""
-        if any(
-            s.node == service.node
-            for s in self._host.clients().values()
-            if s.client_id not in self.client_ids
-        ):
-            return False  # a websocket client has that node name; never impersonate it
+        if self.stand_ins.node_is_a_client(service.node):
+            return False
         client = self._open(
             ServiceClient, service.name, service.type_name, self._on_reply, service.request_header
         )
         if client is None:
             return False
-        stand_in = self.stand_ins.get(service.node)
-        if stand_in is None:
-            stand_in = self._host.connect_internal(
-                service.node, self._stand_in_receives, peer="dds"
-            )
-            self.stand_ins[service.node] = stand_in
-            self.client_ids.add(stand_in)
         self.clients[service.name] = client
         self._remote[service.name] = service
-        self._send(
-            stand_in,
-            {"op": "advertise_service", "service": service.name, "type": service.type_name},
-        )
+        self.stand_ins.advertise(service.node, service.name, service.type_name)
         return True
 
     def _withdraw(self, name: str) -> bool:
@@ -140,18 +126,9 @@ class ServiceMirror:
             client.close()
         for key in [k for k in self._to_dds if k[0] == name]:  # unadvertising fails them
             del self._to_dds[key]
-        stand_in = self.stand_ins.get(service.node)
-        if stand_in is None:
-            return client is not None
-        self._send(stand_in, {"op": "unadvertise_service", "service": name})
-        if not any(s.node == service.node for s in self._remote.values()):
-            del self.stand_ins[service.node]
-            self.client_ids.discard(stand_in)
-            self._host.disconnect_internal(stand_in)
-        return True
-
-    def _send(self, client_id: int, op: JsonObject) -> None:
-        self._host.send_op(client_id, op)
+        still_serves = any(s.node == service.node for s in self._remote.values())
+        withdrawn = self.stand_ins.unadvertise(service.node, name, still_serves)
+        return withdrawn or client is not None
 
     def guids(self) -> tuple[list[bytes], list[bytes]]:
         """(reader GUIDs, writer GUIDs) of every service endpoint."""
@@ -160,7 +137,7 @@ class ServiceMirror:
 
     def close(self) -> None:
         self.sync({}, {})
-        self._host.disconnect_internal(self.caller)
+        self.caller.close()
 
     # -- DDS clients calling local providers ------------------------------------------------
 
@@ -168,18 +145,10 @@ class ServiceMirror:
         server = self.servers.get(service)
         if server is None:
             return
-        self._calls += 1
-        call_id = f"dds:{self._calls}"
-        self._from_dds[call_id] = (server, request)
-        self._send(
-            self.caller, {"op": "call_service", "service": service, "args": msg, "id": call_id}
-        )
+        self.caller.call(service, msg, (server, request))
 
-    def _caller_receives(self, send: Send) -> None:
-        payload = send.item.payload if isinstance(send.item, ControlMessage) else {}
-        waiting = self._from_dds.pop(str(payload.get("id")), None)
-        if payload.get("op") != "service_response" or waiting is None:
-            return
+    def _answered(self, waiting: tuple[ServiceServer, RequestId], payload: JsonObject) -> None:
+        """The local provider's `service_response` to a DDS request: the DDS reply."""
         server, request = waiting
         if payload.get("result") is True and isinstance(payload.get("values"), dict):
             server.send(request, payload["values"])
@@ -193,35 +162,14 @@ class ServiceMirror:
     # -- local callers using remote servers -------------------------------------------------
 
     def _stand_in_receives(self, send: Send) -> None:
-        payload = send.item.payload if isinstance(send.item, ControlMessage) else {}
-        if payload.get("op") != "call_service":
-            return
-        name = payload.get("service")
-        client = self.clients.get(
-            name if isinstance(name, str) and name.startswith("/") else f"/{name}"
-        )
+        payload = graph_mirror.control_payload(send)
+        client = graph_mirror.called_endpoint(self.clients, payload)
         if client is None:
             return
         request = client.request(payload.get("args") or {})
-        self._to_dds[(client.service, request.sequence)] = (
-            send.client_id,
-            payload.get("id"),
-            payload.get("service"),
-        )
+        self._to_dds[(client.service, request.sequence)] = graph_mirror.waiting_call(send, payload)
 
     def _on_reply(self, service: str, request: RequestId, msg: Message) -> None:
         waiting = self._to_dds.pop((service, request.sequence), None)
-        if waiting is None:
-            return
-        stand_in, request_id, spelling = waiting
-        if stand_in in self.client_ids:
-            self._send(
-                stand_in,
-                {
-                    "op": "service_response",
-                    "id": request_id,
-                    "service": spelling,
-                    "values": msg,
-                    "result": True,
-                },
-            )
+        if waiting is not None:
+            self.stand_ins.answer(waiting, msg, ok=True)

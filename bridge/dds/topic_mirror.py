@@ -16,33 +16,14 @@ from typing import TypeVar
 from bridge.dds.naming import topic_to_dds
 from bridge.dds.participant import DdsPlumbing, RawReader, RawWriter
 from bridge.dds.qos import QosProfile
+from bridge.graph_mirror import Arrival, Wanted
 from bridge.outgoing import TopicMessage
 from schemas.codec_cdr import from_cdr, to_cdr
 from schemas.errors import SchemaError
 from schemas.registry import TypeRegistry
-from schemas.values import Message
 
 logger = logging.getLogger("bridge.dds")
 EndpointT = TypeVar("EndpointT", RawWriter, RawReader)
-
-
-@dataclass(frozen=True)
-class Wanted:
-    """A DDS endpoint the mirror wants for a topic: its ROS type and QoS."""
-
-    type_name: str
-    profile: QosProfile
-
-
-@dataclass(frozen=True)
-class Arrival:
-    """A decoded sample for the event loop: what, from which remote writer, its CDR."""
-
-    topic: str
-    type_name: str
-    msg: Message
-    cdr: bytes
-    writer_guid: bytes | None
 
 
 @dataclass

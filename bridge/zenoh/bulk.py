@@ -12,10 +12,9 @@ whole, fresh scans, as many as the link carries. Encoding to CDR happens here to
 from __future__ import annotations
 
 import logging
-import threading
 from collections.abc import Callable
 
-from bridge.dds.outbox import Outbox
+from bridge.dds.outbox import Outbox, WriterThread
 
 logger = logging.getLogger("bridge.zenoh")
 
@@ -24,27 +23,18 @@ _NO_BYTE_BOUND = 1 << 62
 
 
 class BulkWriter:
-    """Runs each topic's newest put job on one thread; `dropped` counts the replaced ones."""
+    """Runs each topic's newest put job on one thread (the DDS mirror's `WriterThread`);
+    `outbox.dropped` counts the replaced ones."""
 
     def __init__(self) -> None:
         self.outbox = Outbox(max_items=1, max_bytes=_NO_BYTE_BOUND)
-        self._thread = threading.Thread(target=self._run, name="bridge-zenoh-bulk", daemon=True)
-        self._thread.start()
+        self._writer = WriterThread(
+            self.outbox, "bridge-zenoh-bulk", "Zenoh: a large message was not sent", logger
+        )
+        self._writer.start()
 
     def put(self, topic: str, job: Callable[[], None], size: int) -> None:
         self.outbox.put(topic, job, size)
 
     def close(self) -> None:
-        self.outbox.close()
-        if self._thread.is_alive():
-            self._thread.join(timeout=5.0)
-
-    def _run(self) -> None:
-        while not self.outbox.closed:
-            job = self.outbox.get(timeout_s=1.0)
-            if job is None:
-                continue
-            try:
-                job()
-            except Exception:  # one unsendable message (a publisher just closed) ends nothing
-                logger.exception("Zenoh: a large message was not sent")
+        self._writer.stop()

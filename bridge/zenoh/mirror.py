@@ -10,23 +10,23 @@ What goes where:
 - a sample from Zenoh is published into the bridge as its remote node's; the sink ignores what
   the mirror injected itself and what the bridge publishes on its own account, and the
   subscribers take only other sessions' samples, so nothing echoes;
-- every `RECONCILE_S` (and soon after a liveliness change or a first message) publishers,
-  subscribers, services and the graph's remote half are brought in step.
+- every `graph_mirror.RECONCILE_S` (and soon after a liveliness change or a first message)
+  publishers, subscribers, services and the graph's remote half are brought in step.
 """
 
 from __future__ import annotations
 
 import asyncio
-import contextlib
 import logging
 from typing import TYPE_CHECKING
 
 import zenoh
 
+from bridge import graph_mirror
 from bridge.dds.discovery import RemoteTopic
 from bridge.dds.graph_sync import GraphSync
-from bridge.dds.qos import advertised_profile, reader_profile, strongest
-from bridge.errors import BridgeError, ZenohStartError
+from bridge.dds.qos import QosProfile, advertised_profile, reader_profile
+from bridge.errors import ZenohStartError
 from bridge.host import PluginHost
 from bridge.zenoh.graph import ZenohGraph
 from bridge.zenoh.liveliness import ADMIN_SPACE, TokenProblem
@@ -34,16 +34,15 @@ from bridge.zenoh.node import ZenohNode
 from bridge.zenoh.problems import ProblemLog
 from bridge.zenoh.services import ZenohServices
 from bridge.zenoh.session import ZenohSettings, open_session
-from bridge.zenoh.topics import Arrival, Wanted, ZenohTopics
-from schemas.errors import SchemaError
+from bridge.zenoh.topics import ZenohTopics
 
 if TYPE_CHECKING:
     from bridge.context import Context
+    from bridge.graph import TopicEntry
     from bridge.outgoing import TopicMessage
 
 logger = logging.getLogger("bridge.zenoh")
 
-RECONCILE_S = 0.1  # how late a new advertisement or subscription reaches Zenoh at most
 SOURCE = "zenoh"  # this graph's name in rosapi's view of other graphs and for gateways
 
 
@@ -55,12 +54,11 @@ class ZenohMirror:
         self.config = host.config
         self.problems = ProblemLog(logger)
         self.graph_sync = GraphSync()
-        self._injecting = False
+        self._injection = graph_mirror.Injection(host)
         self._injected_nodes: set[str] = set()
         self._waiting_first: dict[str, TopicMessage] = {}
         self._remote_topics: dict[str, RemoteTopic] = {}  # as of the last reconcile
-        self._task: asyncio.Task[None] | None = None
-        self._wake = asyncio.Event()
+        self._reconciler = graph_mirror.Reconciler(self.reconcile, logger, "Zenoh")
 
     async def start(self) -> None:
         loop = self._loop = asyncio.get_running_loop()
@@ -85,7 +83,7 @@ class ZenohMirror:
             history=True,
         )
         self.host.add_sink(self)
-        self._task = asyncio.create_task(self._reconcile_forever(), name="bridge-zenoh")
+        self._reconciler.start("bridge-zenoh")
         logger.info(
             "Zenoh: domain %d as node %s (session %s, distro %s), listening on %s, connecting "
             "to %s",
@@ -98,10 +96,7 @@ class ZenohMirror:
         )
 
     async def stop(self) -> None:
-        if self._task is not None:
-            self._task.cancel()
-            with contextlib.suppress(asyncio.CancelledError):
-                await self._task
+        await self._reconciler.stop()
         self.host.remove_sink(self)
         self._liveliness.undeclare()
         self.services.close()
@@ -116,48 +111,40 @@ class ZenohMirror:
 
     def accept(self, ctx: Context, message: TopicMessage, origin_node: str) -> None:
         """Every message published in the graph: send clients' (and other graphs') out."""
-        if self._injecting or origin_node not in self.local_nodes():
+        if self._injection.active or origin_node not in self.local_nodes():
             return
         if not self.topics.send(message):
             self._waiting_first[message.topic] = message  # its publisher is made next
-            self._wake.set()
+            self._reconciler.wake()
 
     def local_nodes(self) -> set[str]:
         """Nodes whose endpoints and messages go to Zenoh: the websocket clients' and those
         other graphs' plug-ins speak for (not the mirror's own in-process clients)."""
-        own = self.services.client_ids
-        clients = {s.node for s in self.host.clients().values() if s.client_id not in own}
-        return clients | self.host.gateway_nodes(SOURCE)
+        return graph_mirror.mirrored_nodes(self.host, self.services.client_ids, SOURCE)
 
     # -- Zenoh's messages and tokens in ------------------------------------------------------
 
-    def _inject(self, arrival: Arrival) -> None:
+    def _inject(self, arrival: graph_mirror.Arrival) -> None:
         node = self._publisher_node(arrival)
         subscriber = self.topics.subscribers.get(arrival.topic)
-        latch = subscriber is not None and subscriber.wanted.qos.transient_local
-        self._injecting = True
-        try:
-            self.host.publish_external(
-                node, arrival.topic, arrival.type_name, arrival.msg, arrival.cdr, latch=latch
-            )
-        except (BridgeError, SchemaError) as exc:
-            self.problems.dropped(arrival.topic, "sample not published", str(exc))
+        latch = subscriber is not None and subscriber.wanted.profile.transient_local
+        problem = self._injection.publish(node, arrival, latch)
+        if problem is not None:
+            self.problems.dropped(arrival.topic, "sample not published", problem)
             return
-        finally:
-            self._injecting = False
         self.graph_sync.noted_publisher(arrival.topic, node)
         if node not in self._injected_nodes:
             self._injected_nodes.add(node)
-            self._wake.set()
+            self._reconciler.wake()
 
-    def _publisher_node(self, arrival: Arrival) -> str:
+    def _publisher_node(self, arrival: graph_mirror.Arrival) -> str:
         """The remote node that published `arrival`: the topic's one remote publisher, else a
         name made from the sample's source GID."""
         topic = self._remote_topics.get(arrival.topic)
         nodes = list(topic.publishers) if topic is not None else []
         if len(nodes) == 1 and nodes[0] not in self.local_nodes():
             return nodes[0]
-        return f"/zenoh_participant_{arrival.source_gid[:4].hex()}"
+        return f"/zenoh_participant_{(arrival.sender_gid or b'')[:4].hex()}"
 
     def _token(self, kind: zenoh.SampleKind, key: str) -> None:
         try:
@@ -168,26 +155,17 @@ class ZenohMirror:
         except TokenProblem as exc:
             self.problems.dropped("liveliness", "malformed token", str(exc))
             return
-        self._wake.set()
+        self._reconciler.wake()
 
     # -- keeping Zenoh in step with the graph ------------------------------------------------
-
-    async def _reconcile_forever(self) -> None:
-        while True:
-            try:
-                self.reconcile()
-            except Exception:  # a bug here must not end the mirror
-                logger.exception("Zenoh: reconcile failed")
-            with contextlib.suppress(TimeoutError):
-                async with asyncio.timeout(RECONCILE_S):
-                    await self._wake.wait()
-            self._wake.clear()
 
     def reconcile(self) -> None:
         """Bring publishers, subscribers, services and the graph's remote half in step."""
         local = self.local_nodes()
         remote_topics = self._remote_topics = self.graph.topics()
-        publishers, subscribers = self._wanted_topics(local, remote_topics)
+        publishers, subscribers = graph_mirror.wanted_topics(
+            self.host.graph.topics.values(), local, remote_topics, _advertised, _reading
+        )
         self.topics.sync(publishers, subscribers)
         for message in self._waiting_first.values():
             self.topics.send(message)
@@ -196,30 +174,16 @@ class ZenohMirror:
         remote_nodes = self.graph.nodes()
         self.host.set_external_nodes(SOURCE, remote_nodes)
         self.host.claim_nodes(SOURCE, (remote_nodes | self._injected_nodes) - local)
-        provided = {
-            name: entry.type_name
-            for name, entry in self.host.graph.services.items()
-            if entry.provider in local and entry.type_name
-        }
-        self.services.sync(provided, self.graph.services())
+        self.services.sync(
+            graph_mirror.provided_by(self.host.graph.services, local), self.graph.services()
+        )
 
-    def _wanted_topics(
-        self, local: set[str], remote: dict[str, RemoteTopic]
-    ) -> tuple[dict[str, Wanted], dict[str, Wanted]]:
-        publishers: dict[str, Wanted] = {}
-        subscribers: dict[str, Wanted] = {}
-        for entry in self.host.graph.topics.values():
-            if entry.type_name is None:
-                continue
-            publishing = [node for node in entry.publishers if node in local]
-            if publishing:
-                profiles = [
-                    advertised_profile(node in entry.latching, entry.qos.get(node))[0]
-                    for node in publishing
-                ]
-                publishers[entry.name] = Wanted(entry.type_name, strongest(profiles))
-            if any(node in local for node in entry.subscribers):
-                seen = remote.get(entry.name)
-                offered = [p for ps in seen.publishers.values() for p in ps] if seen else []
-                subscribers[entry.name] = Wanted(entry.type_name, reader_profile(offered))
-        return publishers, subscribers
+
+def _advertised(entry: TopicEntry, node: str) -> QosProfile:
+    """The publisher's profile: as the node advertised it (ROS 2's default if it cannot be)."""
+    return advertised_profile(node in entry.latching, entry.qos.get(node))[0]
+
+
+def _reading(entry: TopicEntry, offered: list[QosProfile]) -> QosProfile:
+    """The subscriber's profile: adapted to the remote publishers'."""
+    return reader_profile(offered)

@@ -21,9 +21,9 @@ from typing import Any
 
 import zenoh
 
+from bridge import graph_mirror
 from bridge.effects import Send
 from bridge.host import PluginHost
-from bridge.outgoing import ControlMessage
 from bridge.zenoh.attachment import (
     Attachment,
     AttachmentProblem,
@@ -37,7 +37,7 @@ from bridge.zenoh.node import Declared, ZenohNode
 from bridge.zenoh.problems import ProblemLog
 from schemas.codec_cdr import from_cdr, to_cdr
 from schemas.errors import SchemaError
-from schemas.values import JsonObject, JsonValue, Message
+from schemas.values import JsonObject, Message
 
 logger = logging.getLogger("bridge.zenoh")
 
@@ -77,14 +77,15 @@ class ZenohServices:
         self, host: PluginHost, node: ZenohNode, to_loop: ToLoop, problems: ProblemLog
     ) -> None:
         self._host, self._node, self._to_loop, self._problems = host, node, to_loop, problems
-        self.caller = host.connect_internal(node.fqn, self._caller_receives, peer="zenoh")
-        self.client_ids = {self.caller}
+        self.caller = graph_mirror.Caller(host, node.fqn, "zenoh", self._answered)
+        self.client_ids = {self.caller.client_id}
         self.servers: dict[str, _Server] = {}
         self.clients: dict[str, _Client] = {}
-        self.stand_ins: dict[str, int] = {}  # remote node -> its stand-in client id
-        self._from_zenoh: dict[str, _Waiting] = {}
-        self._to_zenoh: dict[tuple[str, int], tuple[int, JsonValue, JsonValue]] = {}
-        self._calls = itertools.count(1)
+        self.stand_ins = graph_mirror.StandIns(
+            host, self._stand_in_receives, "zenoh", self.client_ids
+        )
+        # (service, sequence) -> the call waiting for the server's reply
+        self._to_zenoh: dict[tuple[str, int], graph_mirror.WaitingCall] = {}
 
     # -- keeping in step ---------------------------------------------------------------------
 
@@ -127,12 +128,8 @@ class ZenohServices:
 
     def _adopt(self, service: RemoteZenohService) -> None:
         """Advertise a remote server's service through a stand-in named like its node."""
-        if any(
-            s.node == service.node
-            for s in self._host.clients().values()
-            if s.client_id not in self.client_ids
-        ):
-            return  # a websocket client has that node name; never impersonate it
+        if self.stand_ins.node_is_a_client(service.node):
+            return
         try:
             key = data_key(self._node.domain, service.name, service.type_name, service.type_hash)
         except (KeyProblem, ValueError) as exc:
@@ -142,17 +139,7 @@ class ZenohServices:
         self.clients[service.name] = _Client(
             service, key, self._node.declare(EntityKind.CLIENT, endpoint)
         )
-        stand_in = self.stand_ins.get(service.node)
-        if stand_in is None:
-            stand_in = self._host.connect_internal(
-                service.node, self._stand_in_receives, peer="zenoh"
-            )
-            self.stand_ins[service.node] = stand_in
-            self.client_ids.add(stand_in)
-        self._host.send_op(
-            stand_in,
-            {"op": "advertise_service", "service": service.name, "type": service.type_name},
-        )
+        self.stand_ins.advertise(service.node, service.name, service.type_name)
 
     def _withdraw(self, name: str) -> None:
         client = self.clients.pop(name)
@@ -160,21 +147,14 @@ class ZenohServices:
         for key in [k for k in self._to_zenoh if k[0] == name]:  # unadvertising fails them
             del self._to_zenoh[key]
         node = client.remote.node
-        stand_in = self.stand_ins.get(node)
-        if stand_in is None:
-            return
-        self._host.send_op(stand_in, {"op": "unadvertise_service", "service": name})
-        if not any(c.remote.node == node for c in self.clients.values()):
-            del self.stand_ins[node]
-            self.client_ids.discard(stand_in)
-            self._host.disconnect_internal(stand_in)
+        still_serves = any(c.remote.node == node for c in self.clients.values())
+        self.stand_ins.unadvertise(node, name, still_serves)
 
     def close(self) -> None:
         self.sync({}, {})
-        for waiting in self._from_zenoh.values():
+        for waiting in self.caller.waiting.values():
             waiting.query.drop()
-        self._from_zenoh.clear()
-        self._host.disconnect_internal(self.caller)
+        self.caller.close()
 
     # -- Zenoh clients calling local providers -----------------------------------------------
 
@@ -204,17 +184,10 @@ class ZenohServices:
         if server is None:
             query.drop()
             return
-        call_id = f"zenoh:{next(self._calls)}"
-        self._from_zenoh[call_id] = _Waiting(server, query, request)
-        self._host.send_op(
-            self.caller, {"op": "call_service", "service": name, "args": msg, "id": call_id}
-        )
+        self.caller.call(name, msg, _Waiting(server, query, request))
 
-    def _caller_receives(self, send: Send) -> None:
-        payload = send.item.payload if isinstance(send.item, ControlMessage) else {}
-        waiting = self._from_zenoh.pop(str(payload.get("id")), None)
-        if payload.get("op") != "service_response" or waiting is None:
-            return
+    def _answered(self, waiting: _Waiting, payload: JsonObject) -> None:
+        """The local provider's `service_response` to a Zenoh query: the reply."""
         values = payload.get("values")
         try:
             if payload.get("result") is not True or not isinstance(values, dict):
@@ -235,16 +208,11 @@ class ZenohServices:
     # -- local callers using remote servers --------------------------------------------------
 
     def _stand_in_receives(self, send: Send) -> None:
-        payload = send.item.payload if isinstance(send.item, ControlMessage) else {}
-        if payload.get("op") != "call_service":
-            return
-        name = payload.get("service")
-        client = self.clients.get(
-            name if isinstance(name, str) and name.startswith("/") else f"/{name}"
-        )
+        payload = graph_mirror.control_payload(send)
+        client = graph_mirror.called_endpoint(self.clients, payload)
         if client is None:
             return
-        waiting = (send.client_id, payload.get("id"), payload.get("service"))
+        waiting = graph_mirror.waiting_call(send, payload)
         args = payload.get("args")
         try:
             cdr = to_cdr(
@@ -253,7 +221,7 @@ class ZenohServices:
                 args if isinstance(args, dict) else {},
             )
         except SchemaError as exc:
-            self._answer(waiting, f"request does not encode: {exc}", ok=False)
+            self.stand_ins.answer(waiting, f"request does not encode: {exc}", ok=False)
             return
         sequence = next(client.sequence)
         self._to_zenoh[(client.remote.name, sequence)] = waiting
@@ -286,21 +254,5 @@ class ZenohServices:
 
     def _on_reply(self, name: str, sequence: int, result: Message | str) -> None:
         waiting = self._to_zenoh.pop((name, sequence), None)
-        if waiting is not None and waiting[0] in self.client_ids:
-            if isinstance(result, str):
-                self._answer(waiting, result, ok=False)
-            else:
-                self._answer(waiting, result, ok=True)
-
-    def _answer(
-        self, waiting: tuple[int, JsonValue, JsonValue], values: JsonValue, ok: bool
-    ) -> None:
-        stand_in, request_id, spelling = waiting
-        op: JsonObject = {
-            "op": "service_response",
-            "id": request_id,
-            "service": spelling,
-            "values": values,
-            "result": ok,
-        }
-        self._host.send_op(stand_in, op)
+        if waiting is not None:
+            self.stand_ins.answer(waiting, result, ok=not isinstance(result, str))

@@ -24,7 +24,7 @@ from typing import Any
 import zenoh
 import zenoh.ext
 
-from bridge.dds.qos import QosProfile
+from bridge.graph_mirror import Arrival, Wanted
 from bridge.outgoing import TopicMessage
 from bridge.zenoh.attachment import (
     Attachment,
@@ -39,28 +39,8 @@ from bridge.zenoh.node import Declared, ZenohNode
 from bridge.zenoh.problems import ProblemLog
 from schemas.codec_cdr import from_cdr, to_cdr
 from schemas.registry import TypeRegistry
-from schemas.values import Message
 
 BULK_BYTES = 64 * 1024  # Zenoh's default batch: a larger message is sent in fragments
-
-
-@dataclass(frozen=True)
-class Wanted:
-    """A topic endpoint the mirror wants: its type and QoS."""
-
-    type_name: str
-    qos: QosProfile
-
-
-@dataclass(frozen=True)
-class Arrival:
-    """A checked, decoded sample from Zenoh."""
-
-    topic: str
-    type_name: str
-    msg: Message
-    cdr: bytes
-    source_gid: bytes
 
 
 @dataclass
@@ -124,7 +104,7 @@ class ZenohTopics:
     def _endpoint(self, topic: str, wanted: Wanted) -> tuple[str, Endpoint]:
         hash_ = type_hash(self._registry, wanted.type_name, self._node.distro)
         key = data_key(self._node.domain, topic, wanted.type_name, hash_)
-        return key, Endpoint(topic, wanted.type_name, hash_, wanted.qos)
+        return key, Endpoint(topic, wanted.type_name, hash_, wanted.profile)
 
     def _publisher(self, topic: str, wanted: Wanted) -> _Publisher:
         key, endpoint = self._endpoint(topic, wanted)
@@ -135,15 +115,15 @@ class ZenohTopics:
     def _declare_raw(self, key: str, wanted: Wanted, bulk: bool) -> Any:
         session = self._node.session
         priority = zenoh.Priority.DATA_LOW if bulk else zenoh.Priority.DATA
-        blocking = bulk or wanted.qos.depth == 0  # keep-all, or put from the bulk thread
+        blocking = bulk or wanted.profile.depth == 0  # keep-all, or put from the bulk thread
         congestion = zenoh.CongestionControl.BLOCK if blocking else zenoh.CongestionControl.DROP
-        if wanted.qos.transient_local:
+        if wanted.profile.transient_local:
             return zenoh.ext.declare_advanced_publisher(
                 session,
                 key,
                 congestion_control=congestion,
                 priority=priority,
-                cache=zenoh.ext.CacheConfig(max_samples=max(wanted.qos.depth, 1)),
+                cache=zenoh.ext.CacheConfig(max_samples=max(wanted.profile.depth, 1)),
                 publisher_detection=True,
             )
         return session.declare_publisher(key, congestion_control=congestion, priority=priority)
@@ -157,7 +137,7 @@ class ZenohTopics:
             self._take(topic, wanted, sample)
 
         raw: Any
-        if wanted.qos.transient_local:
+        if wanted.profile.transient_local:
             raw = zenoh.ext.declare_advanced_subscriber(
                 self._node.session,
                 listen,

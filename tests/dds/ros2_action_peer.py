@@ -37,16 +37,11 @@ from cyclonedds.pub import DataWriter
 from cyclonedds.qos import Policy, Qos
 from cyclonedds.sub import DataReader
 from cyclonedds.topic import Topic
+from ros2_wire import ROS2_DEFAULT_QOS, ServiceClients, Time, service_server
 
 ACTION = "/peer_fibonacci"
 STEP_S = 0.1
 SUCCEEDED, CANCELED = 4, 5
-
-
-@dataclass
-class Time(IdlStruct, typename="builtin_interfaces::msg::dds_::Time_"):
-    sec: t.int32
-    nanosec: t.uint32
 
 
 @dataclass
@@ -320,11 +315,7 @@ class String(IdlStruct, typename="std_msgs::msg::dds_::String_"):
     data: str
 
 
-RELIABLE = Qos(
-    Policy.Reliability.Reliable(1_000_000_000),
-    Policy.Durability.Volatile,
-    Policy.History.KeepLast(10),
-)
+RELIABLE = ROS2_DEFAULT_QOS
 BEST_EFFORT = Qos(
     Policy.Reliability.BestEffort, Policy.Durability.Volatile, Policy.History.KeepLast(5)
 )
@@ -356,18 +347,10 @@ class Peer:
             (f"/{node}/get_parameters", GetParametersRequest, GetParametersResponse),
             (f"/{node}/set_parameters", SetParametersRequest, SetParametersResponse),
         ):
-            user_data = Policy.Userdata(data=f"serviceid=peer.{len(self.servers)};".encode())
-            reader = DataReader(
-                participant,
-                Topic(participant, f"rq{name}Request", request),
-                Qos(*RELIABLE, user_data),
+            user_data = f"serviceid=peer.{len(self.servers)};".encode()
+            self.servers[name.rsplit("/", 1)[1]] = service_server(
+                participant, name, request, response, user_data
             )
-            writer = DataWriter(
-                participant,
-                Topic(participant, f"rr{name}Reply", response),
-                Qos(*RELIABLE, user_data),
-            )
-            self.servers[name.rsplit("/", 1)[1]] = (reader, writer)
         self.feedback = DataWriter(
             participant,
             Topic(participant, f"rt{ACTION}/_action/feedback", FeedbackMessage),
@@ -447,70 +430,38 @@ class Peer:
         return SetParametersResponse(request.guid, request.seq, results)
 
 
-class Client:
-    """Service clients, each a request writer and a reply reader: rcl_action's (with the
-    feedback and status readers) or a node's parameter services."""
+class ActionClient(ServiceClients):
+    """rcl_action's client: `send_goal` and `get_result`, with the feedback and status
+    readers."""
 
-    def __init__(self, participant: DomainParticipant, action: str, services=()) -> None:
-        user_data = Policy.Userdata(data=b"clientid=peer.client;")
-        services = services or (
-            (f"{action}/_action/send_goal", SendGoalRequest, SendGoalResponse),
-            (f"{action}/_action/get_result", GetResultRequest, GetResultResponse),
+    def __init__(self, participant: DomainParticipant, action: str) -> None:
+        super().__init__(
+            participant,
+            (
+                (f"{action}/_action/send_goal", SendGoalRequest, SendGoalResponse),
+                (f"{action}/_action/get_result", GetResultRequest, GetResultResponse),
+            ),
         )
-        self.pairs = {}
-        for name, request, response in services:
-            writer = DataWriter(
-                participant,
-                Topic(participant, f"rq{name}Request", request),
-                Qos(*RELIABLE, user_data),
-            )
-            reader = DataReader(
-                participant,
-                Topic(participant, f"rr{name}Reply", response),
-                Qos(*RELIABLE, user_data),
-            )
-            self.pairs[name.rsplit("/", 1)[1]] = (writer, reader)
-        if action:
-            self.feedback = DataReader(
-                participant,
-                Topic(participant, f"rt{action}/_action/feedback", FeedbackMessage),
-                RELIABLE,
-            )
-            status_qos = Qos(
-                Policy.Reliability.Reliable(1_000_000_000),
-                Policy.Durability.TransientLocal,
-                Policy.History.KeepLast(1),
-            )
-            self.status = DataReader(
-                participant,
-                Topic(participant, f"rt{action}/_action/status", GoalStatusArray),
-                status_qos,
-            )
-        first_writer = next(iter(self.pairs.values()))[0]
-        self.guid = first_writer.get_instance_handle() & (2**64 - 1)
-
-    def matched(self) -> bool:
-        return all(
-            writer.get_publication_matched_status().current_count
-            and reader.get_subscription_matched_status().current_count
-            for writer, reader in self.pairs.values()
+        self.feedback = DataReader(
+            participant,
+            Topic(participant, f"rt{action}/_action/feedback", FeedbackMessage),
+            RELIABLE,
         )
-
-    def call(self, part: str, request, deadline_s: float):
-        writer, reader = self.pairs[part]
-        writer.write(request)
-        while time.monotonic() < deadline_s:
-            for reply in reader.take(N=10):
-                if reply.guid == request.guid and reply.seq == request.seq:
-                    return reply
-            time.sleep(0.02)
-        raise TimeoutError(f"no {part} reply")
+        status_qos = Qos(
+            Policy.Reliability.Reliable(1_000_000_000),
+            Policy.Durability.TransientLocal,
+            Policy.History.KeepLast(1),
+        )
+        self.status = DataReader(
+            participant,
+            Topic(participant, f"rt{action}/_action/status", GoalStatusArray),
+            status_qos,
+        )
 
 
 def run_params(participant: DomainParticipant, node: str, timeout_s: float) -> dict:
-    client = Client(
+    client = ServiceClients(
         participant,
-        "",
         (
             (f"/{node}/set_parameters", SetParametersRequest, SetParametersResponse),
             (f"/{node}/list_parameters", ListParametersRequest, ListParametersResponse),
@@ -524,10 +475,8 @@ def run_params(participant: DomainParticipant, node: str, timeout_s: float) -> d
         ),
     )
     deadline_s = time.monotonic() + timeout_s
-    while not client.matched():
-        if time.monotonic() > deadline_s:
-            return {"ok": False, "reason": f"/{node}'s parameter services were never matched"}
-        time.sleep(0.05)
+    if not client.wait_matched(deadline_s):
+        return {"ok": False, "reason": f"/{node}'s parameter services were never matched"}
     gain = Parameter("gain", double(2.5))
     set_reply = client.call(
         "set_parameters", SetParametersRequest(client.guid, 1, [gain]), deadline_s
@@ -554,12 +503,10 @@ def run_params(participant: DomainParticipant, node: str, timeout_s: float) -> d
 
 
 def run_client(participant: DomainParticipant, action: str, order: int, timeout_s: float) -> dict:
-    client = Client(participant, action)
+    client = ActionClient(participant, action)
     deadline_s = time.monotonic() + timeout_s
-    while not client.matched():
-        if time.monotonic() > deadline_s:
-            return {"ok": False, "reason": "the action server was never matched"}
-        time.sleep(0.05)
+    if not client.wait_matched(deadline_s):
+        return {"ok": False, "reason": "the action server was never matched"}
     goal_id = UUID(list(range(1, 17)))
     accepted = client.call(
         "send_goal", SendGoalRequest(client.guid, 1, goal_id, Goal(order)), deadline_s

@@ -27,16 +27,10 @@ import cyclonedds.idl.types as t
 from cyclonedds.domain import DomainParticipant
 from cyclonedds.idl import IdlStruct
 from cyclonedds.pub import DataWriter
-from cyclonedds.qos import Policy, Qos
 from cyclonedds.sub import DataReader
 from cyclonedds.topic import Topic
+from ros2_wire import ROS2_DEFAULT_QOS, ServiceClients, Time
 from rosbags.typesys import Stores, get_typestore
-
-
-@dataclass
-class Time(IdlStruct, typename="builtin_interfaces::msg::dds_::Time_"):
-    sec: t.int32
-    nanosec: t.uint32
 
 
 @dataclass
@@ -92,13 +86,6 @@ class SetBoolResponse(IdlStruct, typename="std_srvs::srv::dds_::SetBool_Response
     message: str
 
 
-ROS2_DEFAULT_QOS = Qos(
-    Policy.Reliability.Reliable(1_000_000_000),
-    Policy.Durability.Volatile,
-    Policy.History.KeepLast(10),
-)
-
-
 def take_imu(participant: DomainParticipant, count: int, timeout_s: float) -> dict:
     reader = DataReader(participant, Topic(participant, "rt/imu/data", Imu), ROS2_DEFAULT_QOS)
     store = get_typestore(Stores.ROS2_JAZZY)
@@ -131,33 +118,18 @@ def publish_wrench(participant: DomainParticipant, seconds: float, force_x: floa
 
 
 def call_set_bool(participant: DomainParticipant, service: str, timeout_s: float) -> dict:
-    client_id = Policy.Userdata(data=b"clientid=peer.1;")  # pairs request writer and reply reader
-    writer = DataWriter(
-        participant,
-        Topic(participant, f"rq{service}Request", SetBoolRequest),
-        Qos(*ROS2_DEFAULT_QOS, client_id),
+    # The request writer and reply reader share the user data that pairs them.
+    client = ServiceClients(
+        participant, ((service, SetBoolRequest, SetBoolResponse),), b"clientid=peer.1;"
     )
-    reader = DataReader(
-        participant,
-        Topic(participant, f"rr{service}Reply", SetBoolResponse),
-        Qos(*ROS2_DEFAULT_QOS, client_id),
-    )
-    guid = writer.get_instance_handle() & (2**64 - 1)
     deadline = time.monotonic() + timeout_s
-    while time.monotonic() < deadline:
-        if (
-            writer.get_publication_matched_status().current_count
-            and reader.get_subscription_matched_status().current_count
-        ):
-            break
-        time.sleep(0.05)
-    writer.write(SetBoolRequest(guid=guid, seq=1, data=True))
-    while time.monotonic() < deadline:
-        for reply in reader.take(N=10):
-            if reply.guid == guid and reply.seq == 1:
-                return {"ok": True, "success": reply.success, "message": reply.message}
-        time.sleep(0.02)
-    return {"ok": False, "reason": "no reply"}
+    client.wait_matched(deadline)  # unmatched at the deadline: written anyway, no reply
+    part = service.rsplit("/", 1)[1]
+    try:
+        reply = client.call(part, SetBoolRequest(guid=client.guid, seq=1, data=True), deadline)
+    except TimeoutError:
+        return {"ok": False, "reason": "no reply"}
+    return {"ok": True, "success": reply.success, "message": reply.message}
 
 
 def main(argv: list[str]) -> int:

@@ -6,10 +6,8 @@ rosapi. The Fast DDS side of the same is tests/dds/test_dds_rclpy.py."""
 from __future__ import annotations
 
 import asyncio
-import json
-import subprocess
-import sys
 import time
+from contextlib import AbstractAsyncContextManager
 from pathlib import Path
 
 import pytest
@@ -17,8 +15,8 @@ import roslibpy
 
 from bridge.compose import run_bridge
 from bridge.config import BridgeConfig
-from bridge.dds.cyclone_xml import CycloneSettings, cyclone_xml
 from clients import RosbridgeClient
+from tests import graph_peers
 from tests.compat import roslibpy_support as rp
 from tests.dds.test_dds_rclpy import (
     DISCOVERY_TIMEOUT_S,
@@ -27,6 +25,7 @@ from tests.dds.test_dds_rclpy import (
     wait_for_action,
     wait_for_service,
 )
+from tests.graph_peers import cyclone_loopback_env, run_json_peer
 
 pytestmark = pytest.mark.slow
 
@@ -35,44 +34,16 @@ PEER_LIFETIME_S = 120.0
 SUCCEEDED = 4  # action_msgs/msg/GoalStatus
 
 
-def start_peer(domain: int, *args: str) -> subprocess.Popen[str]:
-    env = {"CYCLONEDDS_URI": cyclone_xml(CycloneSettings(), tuned=False), "PATH": "/usr/bin"}
+def serving_peer(domain: int, *args: str) -> AbstractAsyncContextManager[object]:
+    """The peer serving (`serve peer_node`, or `args`) for the block, stopped after."""
     args = args or ("serve", "peer_node", str(PEER_LIFETIME_S))
-    process = subprocess.Popen(
-        [sys.executable, str(PEER), str(domain), *args],
-        env=env,
-        stdout=subprocess.PIPE,
-        stderr=subprocess.STDOUT,
-        text=True,
-    )
-    assert process.stdout is not None
-    line = process.stdout.readline()
-    assert line.startswith("READY"), line + process.stdout.read()
-    return process
+    return graph_peers.serving_peer(PEER, str(domain), *args, env=cyclone_loopback_env())
 
 
 async def run_peer(domain: int, *args: str, timeout_s: float = 90.0) -> dict:
     """Run the peer in `client` mode to its end; its JSON line."""
-    env = {"CYCLONEDDS_URI": cyclone_xml(CycloneSettings(), tuned=False), "PATH": "/usr/bin"}
-    process = await asyncio.create_subprocess_exec(
-        sys.executable,
-        str(PEER),
-        str(domain),
-        *args,
-        env=env,
-        stdout=asyncio.subprocess.PIPE,
-        stderr=asyncio.subprocess.PIPE,
-    )
-    try:
-        async with asyncio.timeout(timeout_s):
-            out, err = await process.communicate()
-    finally:
-        if process.returncode is None:
-            process.kill()
-            await process.wait()
-    lines = [line for line in out.decode().splitlines() if line.startswith("{")]
-    assert process.returncode == 0 and lines, (out.decode(), err.decode()[-3000:])
-    return json.loads(lines[-1])
+    env = cyclone_loopback_env()
+    return await run_json_peer(PEER, str(domain), *args, env=env, timeout_s=timeout_s)
 
 
 def roslibpy_goals(host: str, port: int) -> dict:
@@ -97,29 +68,25 @@ def roslibpy_goals(host: str, port: int) -> dict:
 
 
 async def test_an_independent_participants_action_parameters_and_sensor(dds_domain, registry):
-    peer = await asyncio.to_thread(start_peer, dds_domain)
     config = BridgeConfig(host="127.0.0.1", port=0, dds=True, dds_domain=dds_domain)
-    try:
-        async with (
-            run_bridge(config) as bridge,
-            RosbridgeClient(bridge.url, registry=registry) as client,
-        ):
-            sensor = await client.subscribe("/peer_sensor", "std_msgs/msg/String")
-            await first(sensor, lambda m: m["data"].startswith("peer sensor "))
-            await wait_for_action(client, "/peer_fibonacci")
-            outcome = await asyncio.to_thread(roslibpy_goals, "127.0.0.1", bridge.port)
-            await wait_for_service(client, "/peer_node/set_parameters")
-            gain = await client.call_service("/rosapi/get_param", {"name": "/peer_node:gain"})
-            changed = await client.call_service(
-                "/rosapi/set_param", {"name": "/peer_node:gain", "value": "2.5"}
-            )
-            refused = await client.call_service(
-                "/rosapi/set_param", {"name": "/peer_node:other", "value": "1"}
-            )
-            again = await client.call_service("/rosapi/get_param", {"name": "/peer_node:gain"})
-    finally:
-        peer.kill()
-        peer.communicate()
+    async with (
+        serving_peer(dds_domain),
+        run_bridge(config) as bridge,
+        RosbridgeClient(bridge.url, registry=registry) as client,
+    ):
+        sensor = await client.subscribe("/peer_sensor", "std_msgs/msg/String")
+        await first(sensor, lambda m: m["data"].startswith("peer sensor "))
+        await wait_for_action(client, "/peer_fibonacci")
+        outcome = await asyncio.to_thread(roslibpy_goals, "127.0.0.1", bridge.port)
+        await wait_for_service(client, "/peer_node/set_parameters")
+        gain = await client.call_service("/rosapi/get_param", {"name": "/peer_node:gain"})
+        changed = await client.call_service(
+            "/rosapi/set_param", {"name": "/peer_node:gain", "value": "2.5"}
+        )
+        refused = await client.call_service(
+            "/rosapi/set_param", {"name": "/peer_node:other", "value": "1"}
+        )
+        again = await client.call_service("/rosapi/get_param", {"name": "/peer_node:gain"})
     assert outcome["done"]["values"] == {"sequence": [0, 1, 1, 2, 3]}
     assert_feedback_leads_to(outcome["feedback"], [0, 1, 1, 2, 3])
     assert outcome["stopped"]["status"] == roslibpy.core.GoalStatus.CANCELED
@@ -179,20 +146,16 @@ async def test_ros_distro_selects_the_discovery_info_layout(
     information, so its 24-byte layout does not even match a Jazzy reader; a real Humble node
     sends none and the bridge warns once) and names the endpoint after its participant.
     Topics cross either way."""
-    peer = await asyncio.to_thread(start_peer, dds_domain, "humble_node", str(PEER_LIFETIME_S))
     config = BridgeConfig(host="127.0.0.1", port=0, dds=True, dds_domain=dds_domain, distro=distro)
-    try:
-        async with (
-            run_bridge(config) as bridge,
-            RosbridgeClient(bridge.url, registry=registry) as client,
-        ):
-            chatter = await client.subscribe("/humble_chatter", "std_msgs/msg/String")
-            await first(chatter, lambda m: m["data"].startswith("humble "))
-            publishers = await publishers_of(client, "/humble_chatter")
-            version = await client.call_service("/rosapi/get_ros_version", {})
-    finally:
-        peer.kill()
-        peer.communicate()
+    async with (
+        serving_peer(dds_domain, "humble_node", str(PEER_LIFETIME_S)),
+        run_bridge(config) as bridge,
+        RosbridgeClient(bridge.url, registry=registry) as client,
+    ):
+        chatter = await client.subscribe("/humble_chatter", "std_msgs/msg/String")
+        await first(chatter, lambda m: m["data"].startswith("humble "))
+        publishers = await publishers_of(client, "/humble_chatter")
+        version = await client.call_service("/rosapi/get_ros_version", {})
     assert version == {"version": 2, "distro": distro}
     layout_notes = [r for r in caplog.records if "ros_discovery_info sample" in r.getMessage()]
     if named:

@@ -6,17 +6,16 @@ off (the bridge's default; the independent participant sets it itself).
 
 from __future__ import annotations
 
-import asyncio
-import json
 import os
 import random
 import socket
-import sys
 import time
 from pathlib import Path
 from typing import Any
 
 import pytest
+
+from tests.graph_peers import run_json_peer
 
 PEER = Path(__file__).resolve().parent / "zenoh_peer.py"
 _DOMAINS = list(range(100, 231))
@@ -41,23 +40,5 @@ async def run_peer(
     endpoint: str, domain: int, *args: str, timeout_s: float = 90.0, distro: str = "jazzy"
 ) -> Any:
     """Run zenoh_peer.py in its own process (as a node of `distro`); its last JSON line."""
-    process = await asyncio.create_subprocess_exec(
-        sys.executable,
-        str(PEER),
-        endpoint,
-        str(domain),
-        *args,
-        env={"PATH": "/usr/bin", "RUST_LOG": "error", "ROS_DISTRO": distro},
-        stdout=asyncio.subprocess.PIPE,
-        stderr=asyncio.subprocess.PIPE,
-    )
-    try:
-        async with asyncio.timeout(timeout_s):
-            out, err = await process.communicate()
-    finally:
-        if process.returncode is None:
-            process.kill()
-            await process.wait()
-    lines = [line for line in out.decode().splitlines() if line.startswith("{")]
-    assert process.returncode == 0 and lines, (out.decode(), err.decode()[-3000:])
-    return json.loads(lines[-1])
+    env = {"PATH": "/usr/bin", "RUST_LOG": "error", "ROS_DISTRO": distro}
+    return await run_json_peer(PEER, endpoint, str(domain), *args, env=env, timeout_s=timeout_s)

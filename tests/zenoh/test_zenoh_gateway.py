@@ -17,6 +17,7 @@ from bridge.compose import run_bridge
 from bridge.config import BridgeConfig
 from clients import RosbridgeClient
 from clients.errors import ServiceError
+from tests.graph_peers import RecordingService
 from tests.receiving import drain
 from tests.zenoh.conftest import run_peer
 
@@ -35,12 +36,7 @@ async def test_dds_and_zenoh_exchange_messages_once_and_a_service(
         zenoh_listen=(zenoh_endpoint,),
     )
     dds_only = BridgeConfig(host="127.0.0.1", port=0, dds=True, dds_domain=zenoh_domain)
-    requests = []
-
-    async def gate(args):
-        requests.append(args)
-        return {"success": True, "message": "gate via DDS"}
-
+    gate = RecordingService({"success": True, "message": "gate via DDS"})
     async with (
         run_bridge(gateway) as a,
         run_bridge(dds_only) as b,
@@ -89,7 +85,7 @@ async def test_dds_and_zenoh_exchange_messages_once_and_a_service(
     assert forces == list(range(forces[0], forces[0] + 20))  # Zenoh -> DDS: once, in order
     assert len(seen_on_a) >= 20 and len(seen_on_a) == len(set(seen_on_a))  # no echo
     assert called["success"] is True and called["message"] == "gate via DDS", called
-    assert requests == [{"data": True}]
+    assert gate.requests == [{"data": True}]
     assert answer == {"success": True, "message": "zenoh says True"}
 
 

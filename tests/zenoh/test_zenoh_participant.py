@@ -17,19 +17,10 @@ import pytest
 from bridge.compose import run_bridge
 from bridge.config import BridgeConfig
 from clients import RosbridgeClient
-from simulator.config import CameraConfig, LidarConfig, SceneConfig, SimConfig
-from simulator.node import serve
-from simulator.scene import build_scene
+from tests.graph_peers import RecordingService, light_simulator, speed_while_steering
 from tests.zenoh.conftest import run_peer
 
 pytestmark = pytest.mark.slow
-
-# Coarse terrain and a sparse LIDAR keep the simulator light on two shared cores.
-LIGHT = SimConfig(
-    scene=SceneConfig(terrain_cells=80, trees=10, houses=3),
-    lidar=LidarConfig(horizontal_resolution_deg=2.0, vertical_resolution_deg=2.0, rate_hz=4.0),
-    camera=CameraConfig(width_px=160, height_px=120, rate_hz=4.0),
-)
 
 
 def zenoh_config(domain: int, endpoint: str) -> BridgeConfig:
@@ -41,24 +32,17 @@ def zenoh_config(domain: int, endpoint: str) -> BridgeConfig:
 async def test_participant_sees_tokens_reads_imu_and_steers_the_vessel(
     zenoh_domain, zenoh_endpoint, registry
 ):
-    scene = await asyncio.to_thread(build_scene, LIGHT.scene, seed=LIGHT.seed)
-    stop = asyncio.Event()
     async with (
         run_bridge(zenoh_config(zenoh_domain, zenoh_endpoint)) as bridge,
         RosbridgeClient(bridge.url, registry=registry) as watcher,
     ):
         odom = await watcher.subscribe("/odom", "nav_msgs/msg/Odometry", maxsize=1)
-        sim = asyncio.create_task(serve(bridge.url, LIGHT, stop, scene=scene))
-        try:
+        async with light_simulator(bridge.url):
             imu = asyncio.create_task(run_peer(zenoh_endpoint, zenoh_domain, "imu", "5", "60"))
             steering = asyncio.create_task(
                 run_peer(zenoh_endpoint, zenoh_domain, "wrench", "40", "3000")
             )
-            moving = asyncio.create_task(surge_speed_reaches(odom, 0.5, timeout_s=60.0))
-            await asyncio.wait({moving, steering}, return_when=asyncio.FIRST_COMPLETED)
-            if steering.done():
-                steering.result()  # the peer failed: its output is in the assertion
-            speed = await moving
+            speed = await speed_while_steering(steering, odom, 0.5, timeout_s=60.0)
             nodes = await watcher.call_service("/rosapi/nodes", {})
             publishers = await watcher.call_service("/rosapi/publishers", {"topic": "/cmd_wrench"})
             details = await watcher.call_service("/rosapi/node_details", {"node": "/zenoh_helm"})
@@ -67,9 +51,6 @@ async def test_participant_sees_tokens_reads_imu_and_steers_the_vessel(
             steering.cancel()
             with contextlib.suppress(asyncio.CancelledError):
                 await steering
-        finally:
-            stop.set()
-            await sim
     assert speed >= 0.5
     assert "/zenoh_helm" in nodes["nodes"]  # rosapi lists the Zenoh graph (its tokens)
     assert "/zenoh_helm" in publishers["publishers"]
@@ -88,26 +69,10 @@ async def test_participant_sees_tokens_reads_imu_and_steers_the_vessel(
     assert ("MP", "%imu%data") in kinds and ("MS", "%cmd_wrench") in kinds
 
 
-async def surge_speed_reaches(odom, target_mps: float, timeout_s: float) -> float:
-    """The vessel's surge speed from /odom once it reaches `target_mps`."""
-    speed = 0.0
-    async with asyncio.timeout(timeout_s):
-        async for item in odom:
-            speed = item.msg["twist"]["twist"]["linear"]["x"]
-            if speed >= target_mps:
-                return speed
-    return speed
-
-
 async def test_participant_calls_a_service_a_client_provides(
     zenoh_domain, zenoh_endpoint, registry
 ):
-    requests = []
-
-    async def gate(args):
-        requests.append(args)
-        return {"success": True, "message": "lock gate opening"}
-
+    gate = RecordingService({"success": True, "message": "lock gate opening"})
     async with (
         run_bridge(zenoh_config(zenoh_domain, zenoh_endpoint)) as bridge,
         RosbridgeClient(bridge.url, registry=registry) as provider,
@@ -116,7 +81,7 @@ async def test_participant_calls_a_service_a_client_provides(
         result = await run_peer(zenoh_endpoint, zenoh_domain, "call", "/lock_gate", "30")
     assert result["success"] is True and result["message"] == "lock gate opening", result
     assert result["sequence"] == 7 and result["gid_echoed"] is True
-    assert requests == [{"data": True}]
+    assert gate.requests == [{"data": True}]
 
 
 async def test_bad_samples_are_dropped_with_one_line_each(

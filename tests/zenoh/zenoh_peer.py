@@ -98,43 +98,44 @@ def tokens(session, domain, prefix, timeout_s):
     return {"tokens": [], "timeout": True}
 
 
-def imu(session, domain, count, timeout_s):
-    _, held = declare_node(session, domain, "imu_listener")
-    key = f"{domain}/imu/data/{dds_type('sensor_msgs/msg/Imu')}/{type_hash('sensor_msgs/msg/Imu')}"
-    held.append(
-        declare_endpoint(
-            session,
-            domain,
-            "imu_listener",
-            "MS",
-            1,
-            "/imu/data",
-            "sensor_msgs/msg/Imu",
-            type_hash("sensor_msgs/msg/Imu"),
-        )
-    )
-    messages = []
+def subscribed_samples(session, domain, node, topic, ros_type, count, timeout_s):
+    """Up to COUNT samples of TOPIC taken in TIMEOUT_S, as node NODE with a subscription token."""
+    _, held = declare_node(session, domain, node)
+    hash_ = type_hash(ros_type)
+    held.append(declare_endpoint(session, domain, node, "MS", 1, topic, ros_type, hash_))
+    key = f"{domain}/{topic.strip('/')}/{dds_type(ros_type)}/{hash_}"
+    samples = []
     with session.declare_subscriber(key) as subscriber:
         deadline = time.monotonic() + timeout_s
-        while len(messages) < count and time.monotonic() < deadline:
+        while len(samples) < count and time.monotonic() < deadline:
             sample = subscriber.try_recv()
             if sample is None:
                 time.sleep(0.01)
                 continue
-            msg = STORE.deserialize_cdr(sample.payload.to_bytes(), "sensor_msgs/msg/Imu")
-            sequence, stamp_ns, gid = z_deserialize(tuple[Int64, Int64, bytes], sample.attachment)
-            messages.append(
-                {
-                    "key": str(sample.key_expr),
-                    "frame_id": msg.header.frame_id,
-                    "stamp_ns": msg.header.stamp.sec * 10**9 + msg.header.stamp.nanosec,
-                    "accel_z": msg.linear_acceleration.z,
-                    "covariance_length": len(msg.orientation_covariance),
-                    "sequence": int(sequence),
-                    "source_timestamp_ns": int(stamp_ns),
-                    "gid_length": len(gid),
-                }
-            )
+            samples.append(sample)
+    return samples
+
+
+def imu(session, domain, count, timeout_s):
+    messages = []
+    ros_type = "sensor_msgs/msg/Imu"
+    for sample in subscribed_samples(
+        session, domain, "imu_listener", "/imu/data", ros_type, count, timeout_s
+    ):
+        msg = STORE.deserialize_cdr(sample.payload.to_bytes(), ros_type)
+        sequence, stamp_ns, gid = z_deserialize(tuple[Int64, Int64, bytes], sample.attachment)
+        messages.append(
+            {
+                "key": str(sample.key_expr),
+                "frame_id": msg.header.frame_id,
+                "stamp_ns": msg.header.stamp.sec * 10**9 + msg.header.stamp.nanosec,
+                "accel_z": msg.linear_acceleration.z,
+                "covariance_length": len(msg.orientation_covariance),
+                "sequence": int(sequence),
+                "source_timestamp_ns": int(stamp_ns),
+                "gid_length": len(gid),
+            }
+        )
     return {"messages": messages}
 
 
@@ -201,24 +202,13 @@ def call(session, domain, service, timeout_s):
 
 
 def take(session, domain, topic, count, timeout_s, ros_type="std_msgs/msg/String"):
-    _, held = declare_node(session, domain, "zenoh_reader")
-    held.append(
-        declare_endpoint(
-            session, domain, "zenoh_reader", "MS", 1, topic, ros_type, type_hash(ros_type)
-        )
-    )
-    key = f"{domain}/{topic.strip('/')}/{dds_type(ros_type)}/{type_hash(ros_type)}"
     data, sizes = [], []
-    with session.declare_subscriber(key) as subscriber:
-        deadline = time.monotonic() + timeout_s
-        while len(data) < count and time.monotonic() < deadline:
-            sample = subscriber.try_recv()
-            if sample is None:
-                time.sleep(0.01)
-                continue
-            msg = STORE.deserialize_cdr(sample.payload.to_bytes(), ros_type)
-            data.append(msg.data if isinstance(msg.data, str) else bytes(msg.data).hex()[:16])
-            sizes.append(len(msg.data))
+    for sample in subscribed_samples(
+        session, domain, "zenoh_reader", topic, ros_type, count, timeout_s
+    ):
+        msg = STORE.deserialize_cdr(sample.payload.to_bytes(), ros_type)
+        data.append(msg.data if isinstance(msg.data, str) else bytes(msg.data).hex()[:16])
+        sizes.append(len(msg.data))
     return {"data": data, "sizes": sizes}
 
 
