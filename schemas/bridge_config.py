@@ -218,6 +218,18 @@ class BridgeConfig(BaseModel):
             split=",",
         ),
     ] = ()
+    # The bridge's own parameters as a ROS 2 node's services (`ros2 param` on the bridge).
+    # Opt-in: five more services per bridge that every participant on the domain discovers;
+    # with several bridges on one domain discovery costs grew enough to stall them (docs/ros2.md).
+    dds_parameters: Annotated[
+        bool,
+        Option(
+            "--dds-parameters",
+            DDS,
+            "serve the bridge's own parameters as its DDS node's parameter services",
+            env="RIVERBRIDGE_DDS_PARAMETERS",
+        ),
+    ] = False
     dds_multicast: Annotated[
         Literal["false", "spdp", "true"],
         Option(

@@ -117,7 +117,11 @@ class DdsMirror:
         self.topics = TopicMirror(dds, lambda arrivals: to_loop(self._inject, arrivals))
         self.services = ServiceMirror(self.host, dds, self.node, to_loop)
         self.actions = ActionMirror(self.host, self.node, self.services.client_ids, dds, to_loop)
-        self.params = ParamNode(self.host, dds, self.node, self.services.client_ids, to_loop)
+        self.params = (
+            ParamNode(self.host, dds, self.node, self.services.client_ids, to_loop)
+            if self.config.dds_parameters
+            else None
+        )
         self.announcer = Announcer(dds, self.node, lambda p, n: to_loop(self._nodes_seen, p, n))
         for condition in self.participant.discovery_conditions:
             self.pump.watch(condition, self._take_discovery)
@@ -128,7 +132,8 @@ class DdsMirror:
         self.pump.stop()
         self.writer.stop()
         self.actions.close()
-        self.params.close()
+        if self.params is not None:
+            self.params.close()
         self.services.close()
         self.topics.close()
         self.announcer.close()
@@ -214,7 +219,7 @@ class DdsMirror:
         topic_readers, topic_writers = self.topics.endpoint_guids()
         service_readers, service_writers = self.services.guids()
         action_readers, action_writers = self.actions.guids()
-        param_readers, param_writers = self.params.guids()
+        param_readers, param_writers = self.params.guids() if self.params else ([], [])
         self.announcer.announce(
             topic_readers + service_readers + action_readers + param_readers,
             topic_writers + service_writers + action_writers + param_writers,

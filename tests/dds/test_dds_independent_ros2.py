@@ -168,7 +168,12 @@ async def test_ros_distro_selects_the_discovery_info_layout(
 async def test_the_bridges_own_parameters_are_a_ros2_nodes(dds_domain, registry):
     """`ros2 param`'s services on the bridge's node, answered from the rosapi parameters."""
     config = BridgeConfig(
-        host="127.0.0.1", port=0, dds=True, dds_domain=dds_domain, dds_node="rb_bridge"
+        host="127.0.0.1",
+        port=0,
+        dds=True,
+        dds_domain=dds_domain,
+        dds_node="rb_bridge",
+        dds_parameters=True,
     )
     async with (
         run_bridge(config) as bridge,
