@@ -61,6 +61,8 @@ BRIDGE_OPTIONS = (
     "dds_domain",
     "dds_interface",
     "dds_peers",
+    "dds_parameters",
+    "distro",
     "roles",
     "audit_log",
     "zenoh",
