@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import asyncio
 import json
 import subprocess
 from pathlib import Path
@@ -11,8 +12,10 @@ import pytest
 from mcap.reader import make_reader
 from mcap_ros2.decoder import DecoderFactory
 
+from clients.client import RosbridgeClient
 from clients.stack.launcher import NAVIGATION_TOPICS, SIMULATOR_TOPICS
 from tests.launcher.processes import UpProcess
+from tests.receiving import collect
 
 from .conftest import RIVERBRIDGE
 
@@ -33,6 +36,14 @@ def topic_counts(path: Path) -> tuple[dict[str, int], object]:
     return counts, scan
 
 
+async def navigation_boxes(url: str, timeout_s: float = 90.0) -> int:
+    """Wait for the stack's first LIDAR boxes: navigation's LIDAR worker takes seconds to
+    start (scikit-learn's import), and an attached report must find navigation at work."""
+    async with RosbridgeClient(url, name="boxes-probe") as client:
+        boxes = await client.subscribe("/nav/boxes")
+        return len(await collect(boxes, 1, timeout_s))
+
+
 def report(*args: str) -> subprocess.CompletedProcess[str]:
     return subprocess.run(
         [*RIVERBRIDGE, "report", "--warmup", "2", *args],
@@ -47,6 +58,7 @@ def test_record_the_stack_then_measure_navigation_on_the_replay(tmp_path: Path) 
     up = UpProcess("--record", str(stack_file))
     try:
         url = up.wait_ready()
+        assert asyncio.run(navigation_boxes(url)) == 1, "navigation published no boxes"
         attached = report("--bridge", url, "--duration", "3", "--record", str(attached_file))
     finally:
         code = up.stop()
