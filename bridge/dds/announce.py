@@ -17,7 +17,7 @@ from bridge.dds.discovery import NodeEntities
 from bridge.dds.discovery_info import GID_BYTES, GUID_BYTES, announcement
 from bridge.dds.idl_types import discovery_info_type
 from bridge.dds.naming import DISCOVERY_TOPIC, DISCOVERY_TYPE
-from bridge.dds.participant import DdsPlumbing
+from bridge.dds.participant import DdsPlumbing, RawReader
 from bridge.dds.qos import DISCOVERY, QosProfile
 
 logger = logging.getLogger("bridge.dds")
@@ -41,13 +41,34 @@ class Announcer:
         data_type = discovery_info_type(GID_BYTES[dds.distro])
         user_data = dds.type_hash(DISCOVERY_TYPE)
         self._writer = participant.writer(DISCOVERY_TOPIC, data_type, DISCOVERY, user_data)
-        # rmw_cyclonedds reads it keep-all; any depth works as each participant sends its own.
-        self._reader = participant.reader(
-            DISCOVERY_TOPIC, data_type, QosProfile(transient_local=True, depth=0), user_data
-        )
-        dds.pump.watch(self._reader.condition, self._take)
+        self._reader = self._new_reader()
         self._last: tuple[tuple[bytes, ...], tuple[bytes, ...]] | None = None
         self._warned = False
+
+    def _new_reader(self) -> RawReader:
+        # rmw_cyclonedds reads it keep-all; any depth works as each participant sends its own.
+        reader = self._dds.participant.reader(
+            DISCOVERY_TOPIC,
+            discovery_info_type(GID_BYTES[self._dds.distro]),
+            QosProfile(transient_local=True, depth=0),
+            self._dds.type_hash(DISCOVERY_TYPE),
+        )
+        self._dds.pump.watch(reader.condition, self._take)
+        return reader
+
+    def renew_reader(self) -> None:
+        """Read everybody's announcement again with a new reader.
+
+        A Fast DDS participant's transient-local sample sometimes never reaches the reader
+        matched at start-up (seen with rclpy nodes on rmw_fastrtps_cpp: the writer is matched,
+        the sample does not come until the node changes its entities); a new reader gets the
+        writers' history again. Runs on the loop; after `unwatch` the pump no longer takes
+        from the old reader, which is then deleted.
+        """
+        old = self._reader
+        self._dds.pump.unwatch(old.condition)
+        self._reader = self._new_reader()
+        self._dds.participant.delete(old.entity)  # the next announcement lists the new one
 
     def own_endpoints(self) -> tuple[list[bytes], list[bytes]]:
         return [self._reader.guid], [self._writer.guid]
