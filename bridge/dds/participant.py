@@ -305,10 +305,10 @@ class DdsParticipant:
             )
             for samples, is_writer in ((fresh[1], True), (fresh[2], False))
             for sample in samples
-            if sample.participant_key.bytes != self.guid
+            if sample.sample_info.valid_data and sample.participant_key.bytes != self.guid
         ]
         return DiscoveryDelta(
-            frozenset(p.key.bytes for p in fresh[0]) - {self.guid},
+            frozenset(p.key.bytes for p in fresh[0] if p.sample_info.valid_data) - {self.guid},
             tuple(endpoints),
             frozenset(gone[0]) - {self.guid},
             frozenset(gone[1] | gone[2]),
