@@ -22,6 +22,7 @@ from bridge.dds.qos import DISCOVERY, QosProfile
 
 logger = logging.getLogger("bridge.dds")
 
+PARTICIPANT_ENTITY = b"\x00\x00\x01\xc1"  # the entity id ending a participant's GUID (RTPS)
 NodeUpdate = Callable[[bytes, tuple[NodeEntities, ...]], object]
 
 
@@ -88,8 +89,22 @@ class Announcer:
 
         self._dds.outbox.put(("discovery",), write)
 
+    def hears_from(self, participants: set[bytes]) -> bool:
+        """Whether the reader is matched with the `ros_discovery_info` writer of any of these
+        participants (a writer of another layout may never match: reading again is no use)."""
+        reader = self._reader.entity
+        for handle in reader.get_matched_publications():
+            try:
+                writer = reader.get_matched_publication_data(handle)
+            except Exception:  # gone meanwhile
+                continue
+            if writer is not None and writer.participant_key.bytes in participants:
+                return True
+        return False
+
     def _take(self) -> Callable[[], None] | None:
-        samples = self._reader.take()
+        reader = self._reader
+        samples = reader.take()
         if not samples:
             return None
 
@@ -99,6 +114,9 @@ class Announcer:
                     info = discovery_info.decode(sample.data, self._dds.distro)
                 except ValueError as exc:  # e.g. another distribution's layout
                     self._unreadable(exc)
+                    writer = reader.writer_guid(sample.publication_handle)
+                    if writer is not None:  # heard, but names no node we can read
+                        self._on_nodes(writer[:12] + PARTICIPANT_ENTITY, ())
                     continue
                 if info.participant != self._dds.participant.guid[:GUID_BYTES]:
                     self._on_nodes(info.participant, info.nodes)

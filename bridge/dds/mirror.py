@@ -268,6 +268,8 @@ class DdsMirror:
         elif now >= self._renewal[0]:
             wait = min(2 * self._renewal[1], NODE_INFO_RETRY_MAX_S)
             self._renewal = (now + wait, wait)
+            if not self.announcer.hears_from(silent):
+                return
             logger.info(
                 "DDS: no ros_discovery_info from %s yet; reading it again",
                 ", ".join(sorted(participant_node(p) for p in silent)),
