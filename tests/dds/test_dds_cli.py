@@ -139,6 +139,11 @@ def test_up_passes_dds_options_to_the_bridge(capsys):
     assert stack_components(up_cli.config_from_args(up_cli.build_parser().parse_args([])))[
         0
     ].args == ("--host", "127.0.0.1", "--port", "9090")
+    off = up_cli.build_parser().parse_args(["--dds", "--no-dds-parameters"])
+    assert stack_components(up_cli.config_from_args(off))[0].args[-2:] == (
+        "--dds",
+        "--no-dds-parameters",
+    )
     with pytest.raises(SystemExit):
         up_cli.main(["--domain", "999"])
     assert "--domain" in capsys.readouterr().err
