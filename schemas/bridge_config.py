@@ -218,18 +218,19 @@ class BridgeConfig(BaseModel):
             split=",",
         ),
     ] = ()
-    # The bridge's own parameters as a ROS 2 node's services (`ros2 param` on the bridge).
-    # Opt-in: five more services per bridge that every participant on the domain discovers;
-    # with several bridges on one domain discovery costs grew enough to stall them (docs/ros2.md).
+    # The bridge's own parameters as a ROS 2 node's services (`ros2 param` on the bridge), as
+    # a ROS 2 node has them; --no-dds-parameters leaves out their five services.
     dds_parameters: Annotated[
         bool,
         Option(
             "--dds-parameters",
             DDS,
-            "serve the bridge's own parameters as its DDS node's parameter services",
+            "serve the bridge's own parameters as its DDS node's parameter services (on unless "
+            "--no-dds-parameters)",
             env="RIVERBRIDGE_DDS_PARAMETERS",
+            paired=True,
         ),
-    ] = False
+    ] = True
     dds_multicast: Annotated[
         Literal["false", "spdp", "true"],
         Option(

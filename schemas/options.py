@@ -39,6 +39,7 @@ class Option:
     many: Literal["append", "extend"] | None = None  # tuple fields: --x a --x b, or --x a b
     split: str | None = None  # one value may list several, separated by this
     negate: bool = False  # a bool field the bare flag sets to False
+    paired: bool = False  # a bool field with both --flag and --no-flag (argparse's pair)
     exists: Literal["file", "dir"] | None = None  # a path that must exist (then resolved)
     read: Callable[[Path], Any] | None = None  # the field's value from that path (a secret)
 
@@ -239,6 +240,15 @@ def _add(group: argparse._ArgumentGroup, spell: SpelledOption, default: Any, pas
     """One argument; with `passing` its default is "not given" (None, (), the bare switch's
     opposite) and paths to read stay paths."""
     option = spell.option
+    if spell.switch and option.paired:
+        group.add_argument(
+            option.flag,
+            dest=spell.name,
+            action=argparse.BooleanOptionalAction,
+            default=None if passing else default,
+            help=spell.help_text(),
+        )
+        return
     if spell.switch:
         group.add_argument(
             option.flag,
@@ -280,7 +290,9 @@ def passed_through(
     argv: list[str] = []
     for name, value in config_values(args, model, names).items():
         option = spell_of(model, name).option
-        if isinstance(value, bool):
+        if isinstance(value, bool) and option.paired:
+            argv += [option.flag if value else "--no-" + option.flag.removeprefix("--")]
+        elif isinstance(value, bool):
             argv += [option.flag] if value != option.negate else []
         elif isinstance(value, tuple):
             if option.many == "extend" and value:

@@ -17,11 +17,12 @@ from bridge.dds.discovery import NodeEntities
 from bridge.dds.discovery_info import GID_BYTES, GUID_BYTES, announcement
 from bridge.dds.idl_types import discovery_info_type
 from bridge.dds.naming import DISCOVERY_TOPIC, DISCOVERY_TYPE
-from bridge.dds.participant import DdsPlumbing
+from bridge.dds.participant import DdsPlumbing, RawReader
 from bridge.dds.qos import DISCOVERY, QosProfile
 
 logger = logging.getLogger("bridge.dds")
 
+PARTICIPANT_ENTITY = b"\x00\x00\x01\xc1"  # the entity id ending a participant's GUID (RTPS)
 NodeUpdate = Callable[[bytes, tuple[NodeEntities, ...]], object]
 
 
@@ -41,13 +42,34 @@ class Announcer:
         data_type = discovery_info_type(GID_BYTES[dds.distro])
         user_data = dds.type_hash(DISCOVERY_TYPE)
         self._writer = participant.writer(DISCOVERY_TOPIC, data_type, DISCOVERY, user_data)
-        # rmw_cyclonedds reads it keep-all; any depth works as each participant sends its own.
-        self._reader = participant.reader(
-            DISCOVERY_TOPIC, data_type, QosProfile(transient_local=True, depth=0), user_data
-        )
-        dds.pump.watch(self._reader.condition, self._take)
+        self._reader = self._new_reader()
         self._last: tuple[tuple[bytes, ...], tuple[bytes, ...]] | None = None
         self._warned = False
+
+    def _new_reader(self) -> RawReader:
+        # rmw_cyclonedds reads it keep-all; any depth works as each participant sends its own.
+        reader = self._dds.participant.reader(
+            DISCOVERY_TOPIC,
+            discovery_info_type(GID_BYTES[self._dds.distro]),
+            QosProfile(transient_local=True, depth=0),
+            self._dds.type_hash(DISCOVERY_TYPE),
+        )
+        self._dds.pump.watch(reader.condition, self._take)
+        return reader
+
+    def renew_reader(self) -> None:
+        """Read everybody's announcement again with a new reader.
+
+        A Fast DDS participant's transient-local sample sometimes never reaches the reader
+        matched at start-up (seen with rclpy nodes on rmw_fastrtps_cpp: the writer is matched,
+        the sample does not come until the node changes its entities); a new reader gets the
+        writers' history again. Runs on the loop; after `unwatch` the pump no longer takes
+        from the old reader, which is then deleted.
+        """
+        old = self._reader
+        self._dds.pump.unwatch(old.condition)
+        self._reader = self._new_reader()
+        self._dds.participant.delete(old.entity)  # the next announcement lists the new one
 
     def own_endpoints(self) -> tuple[list[bytes], list[bytes]]:
         return [self._reader.guid], [self._writer.guid]
@@ -67,8 +89,22 @@ class Announcer:
 
         self._dds.outbox.put(("discovery",), write)
 
+    def hears_from(self, participants: set[bytes]) -> bool:
+        """Whether the reader is matched with the `ros_discovery_info` writer of any of these
+        participants (a writer of another layout may never match: reading again is no use)."""
+        reader = self._reader.entity
+        for handle in reader.get_matched_publications():
+            try:
+                writer = reader.get_matched_publication_data(handle)
+            except Exception:  # gone meanwhile
+                continue
+            if writer is not None and writer.participant_key.bytes in participants:
+                return True
+        return False
+
     def _take(self) -> Callable[[], None] | None:
-        samples = self._reader.take()
+        reader = self._reader
+        samples = reader.take()
         if not samples:
             return None
 
@@ -78,6 +114,9 @@ class Announcer:
                     info = discovery_info.decode(sample.data, self._dds.distro)
                 except ValueError as exc:  # e.g. another distribution's layout
                     self._unreadable(exc)
+                    writer = reader.writer_guid(sample.publication_handle)
+                    if writer is not None:  # heard, but names no node we can read
+                        self._on_nodes(writer[:12] + PARTICIPANT_ENTITY, ())
                     continue
                 if info.participant != self._dds.participant.guid[:GUID_BYTES]:
                     self._on_nodes(info.participant, info.nodes)

@@ -1,10 +1,12 @@
 """What the DDS domain holds, in ROS terms: topics, services and the nodes owning them.
 
-Cyclone's built-in discovery topics tell which participants and endpoints exist (a
-`Snapshot`); ROS 2's `ros_discovery_info` tells which node of a participant owns which
-endpoint. `DomainView` combines them. An endpoint that no `ros_discovery_info` claims (a
-plain DDS program) is owned by its participant's only node if it has exactly one, else by a
-name made from the participant: `/dds_participant_<8 hex digits>`. Pure: no Cyclone here.
+Cyclone's built-in discovery topics tell which participants and endpoints came and went
+(a `DiscoveryDelta` per take); ROS 2's `ros_discovery_info` tells which node of a participant
+owns which endpoint. `DomainView` keeps both by GUID, updated by the delta, so a change costs
+what changed, and the ROS graph it derives (topics, services, actions) is rebuilt once per
+change, not on every read. An endpoint that no `ros_discovery_info` claims (a plain DDS
+program) is owned by its participant's only node if it has exactly one, else by a name made
+from the participant: `/dds_participant_<8 hex digits>`. Pure: no Cyclone here.
 """
 
 from __future__ import annotations
@@ -13,6 +15,7 @@ import zlib
 from dataclasses import dataclass, field
 
 from bridge.dds.naming import (
+    DISCOVERY_TOPIC,
     action_of_send_goal,
     parse_dds_topic,
     service_type_of_part,
@@ -35,11 +38,19 @@ class Endpoint:
 
 
 @dataclass(frozen=True)
-class Snapshot:
-    """Remote participants and endpoints alive at one moment."""
+class DiscoveryDelta:
+    """What discovery reported since the last take: remote participants and endpoints that
+    appeared (or changed their QoS), and the GUIDs of those that left."""
 
     participants: frozenset[bytes] = frozenset()
     endpoints: tuple[Endpoint, ...] = ()
+    participants_gone: frozenset[bytes] = frozenset()
+    endpoints_gone: frozenset[bytes] = frozenset()
+
+    def __bool__(self) -> bool:
+        return bool(
+            self.participants or self.endpoints or self.participants_gone or self.endpoints_gone
+        )
 
 
 @dataclass(frozen=True)
@@ -95,27 +106,93 @@ def is_fast_dds(participant: bytes) -> bool:
     return participant[:2] == FAST_DDS_VENDOR
 
 
+def _announces(endpoint: Endpoint) -> bool:
+    return endpoint.is_writer and endpoint.dds_topic == DISCOVERY_TOPIC
+
+
 def participant_node(participant: bytes) -> str:
     """The node name given to endpoints of a participant that announces no nodes."""
     return f"/dds_participant_{zlib.crc32(participant[:12]):08x}"
 
 
 class DomainView:
-    """The latest snapshot and `ros_discovery_info` per participant, read as a ROS graph."""
+    """The domain's participants and endpoints by GUID, kept up to date by `apply`, and
+    `ros_discovery_info` per participant, read as a ROS graph.
+
+    `topics()`, `services()` and `actions()` are computed once per change and then shared:
+    callers must not modify what they return (an unchanged graph returns the same object).
+    """
 
     def __init__(self) -> None:
-        self.snapshot = Snapshot()
+        self.participants: set[bytes] = set()
         self.node_info: dict[bytes, tuple[NodeEntities, ...]] = {}
         self._by_guid: dict[bytes, Endpoint] = {}
+        self._announcing: set[bytes] = set()  # participants writing ros_discovery_info
+        self._held: frozenset[bytes] = frozenset()  # their endpoints are not listed yet
+        self._topics: dict[str, RemoteTopic] | None = None
+        self._services: dict[str, RemoteService] | None = None
+        self._actions: dict[str, RemoteAction] | None = None
 
-    def update_snapshot(self, snapshot: Snapshot) -> None:
-        self.snapshot = snapshot
-        self._by_guid = {e.guid: e for e in snapshot.endpoints}
-        for gone in set(self.node_info) - snapshot.participants:
-            del self.node_info[gone]
+    @property
+    def endpoints(self) -> list[Endpoint]:
+        return list(self._by_guid.values())
 
-    def update_nodes(self, participant: bytes, nodes: tuple[NodeEntities, ...]) -> None:
+    def apply(self, delta: DiscoveryDelta) -> bool:
+        """Take in what discovery reported (departures first); whether anything changed."""
+        changed = False
+        for guid in delta.endpoints_gone:
+            gone = self._by_guid.pop(guid, None)
+            changed |= gone is not None
+            if gone is not None and _announces(gone):
+                self._announcing.discard(gone.participant)
+        for participant in delta.participants_gone:
+            changed |= self._forget_participant(participant)
+        for endpoint in delta.endpoints:
+            changed |= self._by_guid.get(endpoint.guid) != endpoint
+            self._by_guid[endpoint.guid] = endpoint
+            if _announces(endpoint):
+                self._announcing.add(endpoint.participant)
+        fresh = delta.participants - self.participants
+        self.participants |= fresh
+        if changed:
+            self._changed()
+        return changed or bool(fresh)
+
+    def _forget_participant(self, participant: bytes) -> bool:
+        """Drop a departed participant with its nodes and any endpoint still listed."""
+        self.participants.discard(participant)
+        self._announcing.discard(participant)
+        orphans = [g for g, e in self._by_guid.items() if e.participant == participant]
+        for guid in orphans:
+            del self._by_guid[guid]
+        return self.node_info.pop(participant, None) is not None or bool(orphans)
+
+    def update_nodes(self, participant: bytes, nodes: tuple[NodeEntities, ...]) -> bool:
+        """A participant's `ros_discovery_info`; whether it changed anything."""
+        if self.node_info.get(participant) == nodes:
+            return False
         self.node_info[participant] = nodes
+        self._changed()
+        return True
+
+    def unannounced(self) -> set[bytes]:
+        """Participants that write `ros_discovery_info` but whose sample has not arrived."""
+        return self._announcing - self.node_info.keys()
+
+    def hold(self, participants: frozenset[bytes]) -> None:
+        """Leave these participants' endpoints out of topics and services for now: their
+        node names are on the way, and a service listed under a stand-in name would be
+        listed again under the right one (cancelling its calls in flight)."""
+        if participants != self._held:
+            self._held = participants
+            self._changed()
+
+    def _changed(self) -> None:
+        self._topics = self._services = self._actions = None
+
+    def _listed(self) -> list[Endpoint]:
+        held = self._held
+        return [e for e in self._by_guid.values() if e.participant not in held]
 
     def owner(self, endpoint: Endpoint) -> str:
         """The ROS node that owns `endpoint`."""
@@ -138,8 +215,13 @@ class DomainView:
 
     def topics(self) -> dict[str, RemoteTopic]:
         """ROS topics on the domain by name; a name seen with two types keeps the first."""
+        if self._topics is None:
+            self._topics = self._find_topics()
+        return self._topics
+
+    def _find_topics(self) -> dict[str, RemoteTopic]:
         found: dict[str, RemoteTopic] = {}
-        for endpoint in self.snapshot.endpoints:
+        for endpoint in self._listed():
             meaning = parse_dds_topic(endpoint.dds_topic)
             type_name = type_from_dds(endpoint.dds_type)
             if meaning is None or meaning.role != "topic" or type_name is None:
@@ -157,10 +239,15 @@ class DomainView:
     def services(self) -> dict[str, RemoteService]:
         """Service servers: a node with a reader on `rq/<s>Request` and a writer on
         `rr/<s>Reply`."""
+        if self._services is None:
+            self._services = self._find_services()
+        return self._services
+
+    def _find_services(self) -> dict[str, RemoteService]:
         requests: dict[tuple[str, str], str] = {}
         fast_dds: set[tuple[str, str]] = set()
         replies: set[tuple[str, str]] = set()
-        for endpoint in self.snapshot.endpoints:
+        for endpoint in self._listed():
             meaning = parse_dds_topic(endpoint.dds_topic)
             part = type_from_dds(endpoint.dds_type)
             split = service_type_of_part(part) if part else None
@@ -181,10 +268,13 @@ class DomainView:
 
     def actions(self) -> dict[str, RemoteAction]:
         """Action servers: whoever serves an action's `send_goal` service."""
+        if self._actions is not None:
+            return self._actions
         found: dict[str, RemoteAction] = {}
         for service in self.services().values():
             action = action_of_send_goal(service.name, service.type_name)
             if action is not None:
                 name, type_name = action
                 found[name] = RemoteAction(name, type_name, service.node, service.request_header)
+        self._actions = found
         return found

@@ -46,11 +46,18 @@ class GraphSync:
         self.publishers: set[tuple[str, str]] = set()  # (topic, node) added by us
         self.subscribers: set[tuple[str, str]] = set()
         self._conflicts: set[tuple[str, str]] = set()
+        # What the graph was last made of: `DomainView.topics()` returns the same object
+        # until discovery changes, so an unchanged domain costs one comparison per reconcile.
+        self._applied: tuple[dict[str, RemoteTopic], frozenset[str]] | None = None
 
     def apply(
         self, graph: RemoteGraph, topics: dict[str, RemoteTopic], local_nodes: set[str]
     ) -> None:
         """Make the graph's remote endpoints those of `topics`; never touch `local_nodes`'."""
+        local = frozenset(local_nodes)
+        if self._applied is not None and self._applied[0] is topics and self._applied[1] == local:
+            return
+        self._applied = (topics, local)
         wanted_pubs = {(t.name, n) for t in topics.values() for n in t.publishers}
         wanted_subs = {(t.name, n) for t in topics.values() for n in t.subscribers}
         for name, node in self.publishers - wanted_pubs:
@@ -74,7 +81,9 @@ class GraphSync:
 
     def noted_publisher(self, topic: str, node: str) -> None:
         """A message was injected for `node`: the graph has it as a publisher now."""
-        self.publishers.add((topic, node))
+        if (topic, node) not in self.publishers:
+            self.publishers.add((topic, node))
+            self._applied = None  # the next apply decides whether it stays listed
 
     def _listed(self, topic: RemoteTopic, add: Callable[[], None]) -> bool:
         """`add()` the endpoint; a topic whose type clashes is warned about once."""

@@ -31,10 +31,10 @@ from bridge.dds.action_mirror import ActionMirror
 from bridge.dds.announce import Announcer
 from bridge.dds.cyclone_xml import CycloneSettings
 from bridge.dds.discovery import (
+    DiscoveryDelta,
     DomainView,
     NodeEntities,
     RemoteTopic,
-    Snapshot,
     participant_node,
 )
 from bridge.dds.graph_sync import GraphSync
@@ -55,6 +55,13 @@ if TYPE_CHECKING:
 logger = logging.getLogger("bridge.dds")
 
 EXTERNAL_SOURCE = "dds"  # the name of the domain's nodes in rosapi's view of other graphs
+# A participant announces its endpoints one by one: discovery changes within this window
+# cost one reconcile.
+DISCOVERY_COALESCE_S = 0.03
+# A participant that writes ros_discovery_info but whose sample has not come: the topic is
+# read again with a new reader after NODE_INFO_RETRY_S (doubling up to the cap), and its
+# endpoints are held back from the graph for NODE_INFO_HOLD_S (then named after it).
+NODE_INFO_RETRY_S, NODE_INFO_RETRY_MAX_S, NODE_INFO_HOLD_S = 0.25, 30.0, 3.0
 
 
 class DdsMirror:
@@ -70,6 +77,9 @@ class DdsMirror:
         self._waiting_first: dict[str, TopicMessage] = {}
         self._qos_warned: set[tuple[str, str]] = set()
         self._reconciler = graph_mirror.Reconciler(self.reconcile, logger, "DDS")
+        self._wake_pending: asyncio.TimerHandle | None = None
+        self._silent_since: dict[bytes, float] = {}  # participant: loop time
+        self._renewal: tuple[float, float] | None = None  # (when, wait)
 
     async def start(self) -> None:
         loop = self._loop = asyncio.get_running_loop()
@@ -127,6 +137,8 @@ class DdsMirror:
             self.pump.watch(condition, self._take_discovery)
 
     async def stop(self) -> None:
+        if self._wake_pending is not None:
+            self._wake_pending.cancel()
         await self._reconciler.stop()
         self.host.remove_sink(self)
         self.pump.stop()
@@ -175,25 +187,37 @@ class DdsMirror:
     # -- discovery ---------------------------------------------------------------------------
 
     def _take_discovery(self) -> Callable[[], None] | None:
-        snapshot = self.participant.snapshot()
+        delta = self.participant.discovery_changes()
+        if not delta:
+            return None
 
         def seen() -> None:
-            self._loop.call_soon_threadsafe(self._snapshot_seen, snapshot)
+            self._loop.call_soon_threadsafe(self._discovered, delta)
 
         return seen
 
-    def _snapshot_seen(self, snapshot: Snapshot) -> None:
-        self.view.update_snapshot(snapshot)
-        self._reconciler.wake()
+    def _discovered(self, delta: DiscoveryDelta) -> None:
+        if self.view.apply(delta):
+            self._wake_soon()
 
     def _nodes_seen(self, participant: bytes, nodes: tuple[NodeEntities, ...]) -> None:
-        self.view.update_nodes(participant, nodes)
+        if self.view.update_nodes(participant, nodes):
+            self._wake_soon()
+
+    def _wake_soon(self) -> None:
+        """One reconcile for the discovery changes of the next `DISCOVERY_COALESCE_S`."""
+        if self._wake_pending is None:
+            self._wake_pending = self._loop.call_later(DISCOVERY_COALESCE_S, self._wake_now)
+
+    def _wake_now(self) -> None:
+        self._wake_pending = None
         self._reconciler.wake()
 
     # -- keeping DDS in step with the graph --------------------------------------------------
 
     def reconcile(self) -> None:
         """Bring writers, readers, services and the graph's remote half in step."""
+        self._ask_again_for_nodes()
         graph = self.host.graph
         local = self.local_nodes()
         remote_topics = self.view.topics()
@@ -224,6 +248,33 @@ class DdsMirror:
             topic_readers + service_readers + action_readers + param_readers,
             topic_writers + service_writers + action_writers + param_writers,
         )
+
+    def _ask_again_for_nodes(self) -> None:
+        """Hold back, and read `ros_discovery_info` again for, participants that write it
+        but whose sample has not come (`Announcer.renew_reader`)."""
+        silent, now = self.view.unannounced(), self._loop.time()
+        for participant in set(self._silent_since) - silent:
+            del self._silent_since[participant]
+        fresh = silent - self._silent_since.keys()
+        for participant in fresh:
+            self._silent_since[participant] = now
+        self.view.hold(
+            frozenset(p for p, t in self._silent_since.items() if now - t < NODE_INFO_HOLD_S)
+        )
+        if not silent:
+            self._renewal = None
+        elif fresh or self._renewal is None:
+            self._renewal = (now + NODE_INFO_RETRY_S, NODE_INFO_RETRY_S)
+        elif now >= self._renewal[0]:
+            wait = min(2 * self._renewal[1], NODE_INFO_RETRY_MAX_S)
+            self._renewal = (now + wait, wait)
+            if not self.announcer.hears_from(silent):
+                return
+            logger.info(
+                "DDS: no ros_discovery_info from %s yet; reading it again",
+                ", ".join(sorted(participant_node(p) for p in silent)),
+            )
+            self.announcer.renew_reader()
 
     def _domain_nodes(self, remote_topics: dict[str, RemoteTopic], local: set[str]) -> set[str]:
         """The nodes this mirror speaks for: the domain's (what it injected, what it lists)."""

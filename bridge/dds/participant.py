@@ -47,7 +47,7 @@ from cyclonedds.sub import DataReader, Subscriber
 from cyclonedds.topic import Topic
 
 from bridge.dds.cyclone_xml import CycloneSettings, cyclone_xml
-from bridge.dds.discovery import Endpoint, Snapshot
+from bridge.dds.discovery import DiscoveryDelta, Endpoint
 from bridge.dds.idl_types import IdlTypes
 from bridge.dds.outbox import Outbox
 from bridge.dds.qos import QosProfile
@@ -67,8 +67,11 @@ DDS_INFINITY = 0x7FFFFFFFFFFFFFFF
 MAX_BLOCKING_NS = 1_000_000_000
 PUMP_WAIT_NS = 500_000_000
 TAKE_LIMIT = 256  # samples per reader per wake-up
+# Discovery samples per read: the binding allocates (and the GIL holds) room for as many as
+# asked, so a large N costs per call what a million samples would; reads loop in chunks.
+DISCOVERY_CHUNK = 64
 _ANY = SampleState.Any | ViewState.Any | InstanceState.Any
-_ALIVE = SampleState.Any | ViewState.Any | InstanceState.Alive
+_FRESH = SampleState.NotRead | ViewState.Any | InstanceState.Alive
 _NOT_ALIVE = (
     SampleState.Any
     | ViewState.Any
@@ -246,7 +249,7 @@ class DdsParticipant:
             ReadCondition(r, SampleState.NotRead | ViewState.Any | InstanceState.Any)
             for r in self._discovery
         ]
-        self._alive = [ReadCondition(r, _ALIVE) for r in self._discovery]
+        self._fresh = [ReadCondition(r, _FRESH) for r in self._discovery]
         self._gone = [ReadCondition(r, _NOT_ALIVE) for r in self._discovery]
 
     def short_id(self) -> str:
@@ -279,38 +282,53 @@ class DdsParticipant:
         """Delete a writer, reader or condition now (not when Python collects it)."""
         entity.__del__()
 
-    def snapshot(self) -> Snapshot:
-        """Every remote participant and endpoint alive now (ours left out)."""
-        for reader, gone in zip(self._discovery, self._gone, strict=True):
-            reader.take(N=1_000_000, condition=gone)
-        participants = {
-            p.key.bytes for p in self._discovery[0].read(N=1_000_000, condition=self._alive[0])
-        }
-        participants.discard(self.guid)
-        endpoints = []
-        for index, is_writer in ((1, True), (2, False)):
-            reader, alive = self._discovery[index], self._alive[index]
-            for sample in reader.read(N=1_000_000, condition=alive):
-                if sample.participant_key.bytes == self.guid:
-                    continue
-                endpoints.append(
-                    Endpoint(
-                        sample.key.bytes,
-                        sample.participant_key.bytes,
-                        sample.topic_name,
-                        sample.type_name,
-                        is_writer,
-                        profile_of(sample.qos),
-                        user_data_of(sample.qos),
-                    )
-                )
-        return Snapshot(frozenset(participants), tuple(endpoints))
+    def discovery_changes(self) -> DiscoveryDelta:
+        """What discovery reported since the last call (ours left out): the departed are
+        taken (their instances end), the new and changed are read once (kept as read)."""
+        gone = [
+            {s.key.bytes for s in _drain(reader.take, condition)}
+            for reader, condition in zip(self._discovery, self._gone, strict=True)
+        ]
+        fresh = [
+            _drain(reader.read, condition)
+            for reader, condition in zip(self._discovery, self._fresh, strict=True)
+        ]
+        endpoints = [
+            Endpoint(
+                sample.key.bytes,
+                sample.participant_key.bytes,
+                sample.topic_name,
+                sample.type_name,
+                is_writer,
+                profile_of(sample.qos),
+                user_data_of(sample.qos),
+            )
+            for samples, is_writer in ((fresh[1], True), (fresh[2], False))
+            for sample in samples
+            if sample.sample_info.valid_data and sample.participant_key.bytes != self.guid
+        ]
+        return DiscoveryDelta(
+            frozenset(p.key.bytes for p in fresh[0] if p.sample_info.valid_data) - {self.guid},
+            tuple(endpoints),
+            frozenset(gone[0]) - {self.guid},
+            frozenset(gone[1] | gone[2]),
+        )
 
     def close(self) -> None:
         try:
             self.delete(self.participant)
         finally:
             DOMAINS.release(self.domain_id)
+
+
+def _drain(read: Callable[..., list[Any]], condition: ReadCondition) -> list[Any]:
+    """Everything `condition` selects, `DISCOVERY_CHUNK` samples per call."""
+    samples: list[Any] = []
+    while True:
+        chunk = read(N=DISCOVERY_CHUNK, condition=condition)
+        samples.extend(chunk)
+        if len(chunk) < DISCOVERY_CHUNK:
+            return samples
 
 
 # Runs on the pump thread under its lock (take samples, quickly) and returns the rest of the

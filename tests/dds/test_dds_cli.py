@@ -59,6 +59,16 @@ def test_environment_gives_defaults_and_options_win(monkeypatch):
     assert bridge_config(["--ros-distro", "humble"]).distro == "humble"
 
 
+def test_the_bridges_parameter_services_are_on_unless_turned_off(monkeypatch):
+    monkeypatch.delenv("RIVERBRIDGE_DDS_PARAMETERS", raising=False)
+    assert bridge_config(["--dds"]).dds_parameters is True
+    assert bridge_config(["--dds", "--dds-parameters"]).dds_parameters is True  # as before
+    assert bridge_config(["--dds", "--no-dds-parameters"]).dds_parameters is False
+    monkeypatch.setenv("RIVERBRIDGE_DDS_PARAMETERS", "0")
+    assert bridge_config(["--dds"]).dds_parameters is False
+    assert bridge_config(["--dds", "--dds-parameters"]).dds_parameters is True
+
+
 @pytest.mark.parametrize(
     ("argv", "env", "named"),
     [
@@ -129,6 +139,11 @@ def test_up_passes_dds_options_to_the_bridge(capsys):
     assert stack_components(up_cli.config_from_args(up_cli.build_parser().parse_args([])))[
         0
     ].args == ("--host", "127.0.0.1", "--port", "9090")
+    off = up_cli.build_parser().parse_args(["--dds", "--no-dds-parameters"])
+    assert stack_components(up_cli.config_from_args(off))[0].args[-2:] == (
+        "--dds",
+        "--no-dds-parameters",
+    )
     with pytest.raises(SystemExit):
         up_cli.main(["--domain", "999"])
     assert "--domain" in capsys.readouterr().err

@@ -11,7 +11,13 @@ from bridge.config import BridgeConfig
 from bridge.core import BridgeCore
 from bridge.dds import discovery_info, naming, request_header
 from bridge.dds.cyclone_xml import CycloneSettings, cyclone_xml
-from bridge.dds.discovery import DomainView, Endpoint, NodeEntities, Snapshot, participant_node
+from bridge.dds.discovery import (
+    DiscoveryDelta,
+    DomainView,
+    Endpoint,
+    NodeEntities,
+    participant_node,
+)
 from bridge.dds.discovery_info import ParticipantInfo
 from bridge.dds.graph_sync import GraphSync
 from bridge.dds.outbox import Outbox
@@ -29,6 +35,7 @@ from bridge.dds.qos import (
 from bridge.dds.request_header import RequestId
 from schemas.codec_cdr import from_cdr, to_cdr
 
+STRING = "std_msgs::msg::dds_::String_"
 P1, P2 = bytes(range(12)) + b"\x00\x00\x01\xc1", bytes(range(1, 13)) + b"\x00\x00\x01\xc1"
 
 
@@ -168,8 +175,10 @@ def test_domain_view_names_endpoints_after_ros_discovery_info_nodes():
     request = endpoint(4, P1, "rq/setRequest", "std_srvs::srv::dds_::SetBool_Request_", False)
     reply = endpoint(5, P1, "rr/setReply", "std_srvs::srv::dds_::SetBool_Response_", True)
     plain = endpoint(6, P2, "plain_dds_topic", "Whatever", True)
-    view.update_snapshot(
-        Snapshot(frozenset({P1, P2}), (talker_writer, listener, odd_type, request, reply, plain))
+    view.apply(
+        DiscoveryDelta(
+            frozenset({P1, P2}), (talker_writer, listener, odd_type, request, reply, plain)
+        )
     )
     view.update_nodes(
         P1,
@@ -189,8 +198,90 @@ def test_domain_view_names_endpoints_after_ros_discovery_info_nodes():
     assert view.writer_node(talker_writer.guid) == "/talker"
     assert view.writer_node(b"unknown") is None
     assert view.announced_nodes() == {"/talker"}
-    view.update_snapshot(Snapshot(frozenset({P2}), (listener,)))
+    assert view.topics() is topics  # unchanged: not rebuilt
+    view.apply(DiscoveryDelta(participants_gone=frozenset({P1}), endpoints_gone=frozenset()))
     assert view.node_info == {} and view.services() == {}
+    assert view.endpoints == [listener, odd_type, plain]  # P1's went with it
+
+
+def test_domain_view_takes_discovery_by_delta_and_rebuilds_the_graph_once_per_change():
+    view = DomainView()
+    writer = endpoint(1, P1, "rt/chatter", "std_msgs::msg::dds_::String_", True)
+    assert view.apply(DiscoveryDelta(frozenset({P1}), (writer,)))
+    first = view.topics()
+    assert first["/chatter"].publishers == {participant_node(P1): [DEFAULT]}
+    assert not view.apply(DiscoveryDelta(endpoints=(writer,)))  # announced again: no change
+    assert view.topics() is first
+    reliable = Endpoint(writer.guid, P1, writer.dds_topic, writer.dds_type, True, LATCHED)
+    assert view.apply(DiscoveryDelta(endpoints=(reliable,)))  # its QoS changed: replaced
+    assert view.topics()["/chatter"].publishers == {participant_node(P1): [LATCHED]}
+    assert view.update_nodes(P1, (NodeEntities("/talker"),))
+    assert not view.update_nodes(P1, (NodeEntities("/talker"),))
+    assert list(view.topics()["/chatter"].publishers) == ["/talker"]
+    assert not view.apply(DiscoveryDelta(endpoints_gone=frozenset({b"never seen"})))
+    assert view.apply(DiscoveryDelta(endpoints_gone=frozenset({writer.guid})))
+    assert view.topics() == {} and view.writer_node(writer.guid) is None
+    assert view.announced_nodes() == {"/talker"}  # the node stays while its participant does
+    assert view.apply(DiscoveryDelta(participants_gone=frozenset({P1})))
+    assert view.announced_nodes() == set() and view.participants == set()
+    assert not DiscoveryDelta()
+
+
+def test_domain_view_names_participants_whose_ros_discovery_info_has_not_come():
+    view = DomainView()
+    info = "rmw_dds_common::msg::dds_::ParticipantEntitiesInfo_"
+    announcer = endpoint(1, P1, "ros_discovery_info", info, True)
+    view.apply(DiscoveryDelta(frozenset({P1, P2}), (announcer,)))
+    view.apply(DiscoveryDelta(endpoints=(endpoint(2, P2, "ros_discovery_info", info, False),)))
+    assert view.unannounced() == {P1}  # P2 only reads it
+    view.update_nodes(P1, (NodeEntities("/talker"),))
+    assert view.unannounced() == set()
+    view.apply(DiscoveryDelta(endpoints=(endpoint(3, P2, "ros_discovery_info", info, True),)))
+    assert view.unannounced() == {P2}
+    view.apply(DiscoveryDelta(endpoints=(endpoint(4, P2, "rt/chatter", STRING, True),)))
+    assert list(view.topics()) == ["/chatter"]
+    view.hold(frozenset({P2}))  # its node name is on the way: not listed yet
+    assert view.topics() == {}
+    view.hold(frozenset())
+    assert list(view.topics()) == ["/chatter"]
+    view.apply(DiscoveryDelta(participants_gone=frozenset({P2})))
+    assert view.unannounced() == set()
+
+
+class CountingGraph:
+    """The real core, counting the graph calls GraphSync makes."""
+
+    def __init__(self, core: BridgeCore) -> None:
+        self.core, self.calls = core, 0
+
+    def __getattr__(self, name: str):
+        def call(*args):
+            self.calls += 1
+            return getattr(self.core, name)(*args)
+
+        return call
+
+
+def test_graph_sync_changes_the_graph_by_the_delta_and_skips_an_unchanged_domain(registry):
+    graph, sync, view = (
+        CountingGraph(BridgeCore(BridgeConfig(), registry)),
+        GraphSync(),
+        DomainView(),
+    )
+    string = "std_msgs::msg::dds_::String_"
+    view.apply(
+        DiscoveryDelta(
+            endpoints=tuple(endpoint(n, P1, f"rt/t{n}", string, True) for n in range(30))
+        )
+    )
+    sync.apply(graph, view.topics(), set())
+    assert graph.calls == 30 and {f"/t{n}" for n in range(30)} <= set(graph.core.state.graph.topics)
+    sync.apply(graph, view.topics(), set())
+    assert graph.calls == 30  # nothing changed: no graph call
+    view.apply(DiscoveryDelta(endpoints=(endpoint(99, P1, "rt/late", string, False),)))
+    sync.apply(graph, view.topics(), set())
+    assert graph.calls == 31  # the one new subscriber
+    assert graph.core.state.graph.topics["/late"].subscribers == {participant_node(P1)}
 
 
 def test_graph_sync_adds_and_removes_remote_endpoints_but_never_local_ones(registry):
@@ -198,16 +289,12 @@ def test_graph_sync_adds_and_removes_remote_endpoints_but_never_local_ones(regis
     graph, sync, view = core.state.graph, GraphSync(), DomainView()
     graph.add_publisher("/chatter", "/rosbridge_client_1", None, latch=False)
     graph.declare_type("/chatter", "std_msgs/msg/String")
-    view.update_snapshot(
-        Snapshot(
-            frozenset({P1}),
-            (
-                endpoint(1, P1, "rt/chatter", "std_msgs::msg::dds_::String_", True),
-                endpoint(2, P1, "rt/odom", "nav_msgs::msg::dds_::Odometry_", False),
-                endpoint(3, P1, "rt/clash", "std_msgs::msg::dds_::Bool_", True),
-            ),
-        )
+    remote = (
+        endpoint(1, P1, "rt/chatter", "std_msgs::msg::dds_::String_", True),
+        endpoint(2, P1, "rt/odom", "nav_msgs::msg::dds_::Odometry_", False),
+        endpoint(3, P1, "rt/clash", "std_msgs::msg::dds_::Bool_", True),
     )
+    view.apply(DiscoveryDelta(frozenset({P1}), remote))
     view.update_nodes(P1, (NodeEntities("/remote"),))
     graph.declare_type("/clash", "std_msgs/msg/String")
     graph.add_subscriber("/clash", "/rosbridge_client_1")
@@ -216,7 +303,7 @@ def test_graph_sync_adds_and_removes_remote_endpoints_but_never_local_ones(regis
     assert graph.topics["/odom"].subscribers == {"/remote"}
     assert graph.topics["/odom"].type_name == "nav_msgs/msg/Odometry"
     assert "/remote" not in graph.topics["/clash"].publishers  # type conflict: not listed
-    view.update_snapshot(Snapshot())
+    view.apply(DiscoveryDelta(endpoints_gone=frozenset(e.guid for e in remote)))
     sync.apply(core, view.topics(), {"/rosbridge_client_1"})
     assert set(graph.topics["/chatter"].publishers) == {"/rosbridge_client_1"}
     assert "/odom" not in graph.topics

@@ -24,7 +24,8 @@ def test_every_option_is_listed_once_under_its_group_in_help():
         heading = text.index(f"\n{spell.option.group}:")
         nxt = min((i for i in (text.find("\n\n", heading + 1),) if i > 0), default=len(text))
         assert spell.option.flag in text[heading:nxt], spell.option.flag
-        assert text.count(f"  {spell.option.flag} ") + text.count(f"  {spell.option.flag}\n") == 1
+        listed = (f"  {spell.option.flag}{end}" for end in (" ", "\n", ", --no-"))  # paired
+        assert sum(text.count(spelling) for spelling in listed) == 1
 
 
 def test_passed_through_options_give_the_bridge_the_same_configuration(tmp_path):
@@ -35,7 +36,7 @@ def test_passed_through_options_give_the_bridge_the_same_configuration(tmp_path)
     up = argparse.ArgumentParser()
     add_options(up, BridgeConfig, GROUPS, names=names, passing=" (passed on)")
     given = [
-        *("--port", "0", "--max-clients", "3", "--dds", "--dds-untuned"),
+        *("--port", "0", "--max-clients", "3", "--dds", "--dds-untuned", "--no-dds-parameters"),
         *("--dds-peer", "10.0.0.2,10.0.0.3", "--dds-peer", "10.0.0.4"),
         *("--allowed-origins", "https://a.example.org", "http://b:8080"),
         *("--auth-secret-file", str(secret), "--certfile", str(cert), "--keyfile", str(key)),
@@ -48,6 +49,7 @@ def test_passed_through_options_give_the_bridge_the_same_configuration(tmp_path)
     assert through == direct
     assert through.dds_peers == ("10.0.0.2", "10.0.0.3", "10.0.0.4")
     assert through.dds_tuned is False and through.max_clients == 3
+    assert through.dds_parameters is False and "--no-dds-parameters" in argv
     assert through.auth_secret is not None
     assert through.auth_secret.get_secret_value() == "s3cret"
 
