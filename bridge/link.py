@@ -178,9 +178,15 @@ class ClientLink:
         else:
             self._enqueue(send)
         self._service()
-        # Pace the publisher only if its own topic has to wait here: an IMU sample that went
-        # out past a queued scan is no reason to stop reading the IMU's publisher.
-        return self.queue.waiting(send.drop_key) and self.wants_pause()
+        # Pace the publisher only if its own topic has to wait here (an IMU sample that went
+        # out past a queued scan is no reason to stop reading the IMU's publisher), and, while
+        # this link waits for its large-write turn, only once a second message of the topic
+        # waits behind the first: one waiting for its turn is the turns at work, two are a
+        # client falling behind.
+        waiting = self.queue.waiting(send.drop_key)
+        if not waiting or (self._in_line and waiting < 2):
+            return False
+        return self.wants_pause()
 
     def _needs_worker(self, send: Send) -> bool:
         """Encode on a worker? Only large messages whose encode leaves the GIL for part of

@@ -124,10 +124,10 @@ class SendQueue:
         self._forget(item)
         return item
 
-    def waiting(self, key: str | None) -> bool:
-        """Does anything of stream `key` (a topic, or None for answers) wait here?"""
+    def waiting(self, key: str | None) -> int:
+        """Items of stream `key` (a topic, or None for answers) waiting here."""
         stream = self._streams.get(key)
-        return bool(stream)
+        return len(stream) if stream is not None else 0
 
     def push_front(self, item: Waiting) -> None:
         """Put a popped item back at the head of its stream (keeping its place in line)."""
