@@ -15,17 +15,12 @@ loopback never sees less). So on a thin link a scan is not handed to the socket 
 fragments go one at a time, and an IMU sample waits for at most one fragment. While the kernel
 holds the surplus a timer, not the transport, says when to look again.
 
-A frame of a large message (`bridge.turns.LARGE_BYTES`) waits for this link's turn among all
-links: sixteen subscribers of a scan get it one after another, each while its socket is empty,
-and a link waiting for its turn writes its small messages at once. A publisher is paced only
-when its own topic waits at a link.
-
 Large messages whose encode is not just C code holding the GIL are encoded on a worker thread
 (JSON with base64, PNG, CDR); their topic waits for the encode (order per topic), other topics
 keep flowing past it.
 
 Publishers are paced by their subscribers: a link whose queue holds more than `pause_bytes` asks
-the readers whose topic waits in it to stop reading until it drains (TCP backpressure then slows the
+the readers feeding it to stop reading until it drains (TCP backpressure then slows the
 publisher). Only the queue counts: one big message in the socket's buffer (a scan the client
 is still reading) is no reason to hold up the publisher's next frames.
 A link that makes no progress for `STALL_S`, or stays backed up longer than `SLOW_S`, is a slow
@@ -56,7 +51,6 @@ from bridge.outgoing import CBOR, CBOR_RAW, Delivery, WireFrame, render
 from bridge.problems import NS_PER_S, ProblemLog
 from bridge.reply_budget import ReplyBudget
 from bridge.sendqueue import SendQueue, Waiting
-from bridge.turns import DONE_BYTES, LARGE_BYTES, TURN_MAX_S, LargeWriteTurns
 from schemas.safety import echo, safe_text
 
 logger = logging.getLogger("bridge.server")
@@ -80,7 +74,6 @@ SLACK_BYTES = 4 * 1024  # a frame larger than the room goes once no more than th
 SIOCOUTQNSD = 0x894B  # Linux: bytes in a TCP socket's send queue not yet sent
 UNSENT_FRESH_S = 0.001  # the kernel's figure is read at most once a millisecond per link
 PACE_MIN_S, PACE_MAX_S = 0.001, 0.02  # when the kernel holds the surplus, look again within
-TURN_POLL_S = 0.001  # how often a link holding a large-write turn looks whether it is done
 
 Delivered = Callable[[int, Delivery, int, int], None]  # client, delivery, wire bytes, ns
 
@@ -107,7 +100,6 @@ class ClientLink:
         delivered: Delivered,
         over_budget: Callable[[str], None],
         node: str | None = None,
-        turns: LargeWriteTurns[ClientLink] | None = None,
     ) -> None:
         self.client_id = client_id
         self.node = node or f"client {client_id}"  # names the client in log lines
@@ -150,11 +142,6 @@ class ClientLink:
         self._stalled = False
         self._problems = ProblemLog()  # messages that could not be encoded
         self._summary_timer: asyncio.TimerHandle | None = None
-        # Large frames wait for a turn shared with the other links (`bridge.turns`).
-        self._turns = turns
-        self._turn_since: float | None = None  # when this link took its large-write turn
-        self._turn_timer: asyncio.TimerHandle | None = None
-        self._in_line = False  # a large frame waits for this link's turn
 
     # -- sending -----------------------------------------------------------------------------
 
@@ -171,21 +158,13 @@ class ClientLink:
             frames = self._render(send)
             if frames is None:
                 return False
-            if len(frames) == 1 and self._may_write(frames[0]):
+            if len(frames) == 1:
                 self._write(send, frames)
                 return False
             self._enqueue(send, frames)  # fragments leave one at a time, others between them
         else:
             self._enqueue(send)
         self._service()
-        # Pace the publisher only if its own topic has to wait here (an IMU sample that went
-        # out past a queued scan is no reason to stop reading the IMU's publisher), and, while
-        # this link waits for its large-write turn, only once a second message of the topic
-        # waits behind the first: one waiting for its turn is the turns at work, two are a
-        # client falling behind.
-        waiting = self.queue.waiting(send.drop_key)
-        if not waiting or (self._in_line and waiting < 2):
-            return False
         return self.wants_pause()
 
     def _needs_worker(self, send: Send) -> bool:
@@ -216,7 +195,6 @@ class ClientLink:
     def _service(self) -> None:
         """Write waiting messages while the socket has room, a fragment at a time."""
         blocked = False
-        in_line = False  # a large frame waits for its turn (`turn_granted` calls back)
         while self._has_room():
             waiting = self.queue.pop(self._busy)
             if waiting is None:
@@ -230,10 +208,6 @@ class ClientLink:
                 self.queue.push_front(waiting)
                 blocked = True
                 break
-            if not self._may_write(piece):
-                self.queue.push_front(waiting)
-                in_line = True
-                break
             if waiting.send.drop_key is None and not waiting.started:
                 self.replies.credit(waiting.nbytes)  # answers are rendered when queued
             if waiting.first == len(frames) - 1:
@@ -241,48 +215,9 @@ class ClientLink:
             else:
                 self._write(waiting.send, [piece], final=False)
                 self.queue.requeue(waiting, len(piece.data))
-        self._in_line = in_line
-        if (
-            len(self.queue)
-            and not in_line
-            and not self._corked
-            and (blocked or not self._has_room())
-        ):
+        if len(self.queue) and not self._corked and (blocked or not self._has_room()):
             self._wait_for_room()
         self._note_progress()
-
-    def _may_write(self, frame: WireFrame) -> bool:
-        """May `frame` go now as far as turns go? Small frames always; a large one once this
-        link has a turn (it is put in line otherwise)."""
-        if len(frame.data) < LARGE_BYTES or self._turns is None:
-            return True
-        if not self._turns.take(self):
-            return False
-        if self._turn_since is None:  # a new turn: watched from now on, whatever follows
-            self._turn_since = self._loop.time()
-            self._turn_timer = self._loop.call_later(TURN_POLL_S, self._watch_turn)
-        return True
-
-    def turn_granted(self) -> None:
-        """Its turn came: write the large frame that waited for it."""
-        if self.closed or self.closing:
-            assert self._turns is not None
-            self._turns.give_back(self)
-            return
-        self._service()
-
-    def _watch_turn(self) -> None:
-        """After a large frame: give the turn back once the socket has (nearly) taken it."""
-        self._turn_timer = None
-        turns, since = self._turns, self._turn_since
-        if turns is None or since is None:
-            return
-        done = self._outside_bytes() <= DONE_BYTES
-        if done or self.gone or self._loop.time() - since > TURN_MAX_S:
-            self._turn_since = None
-            turns.give_back(self)
-        else:
-            self._turn_timer = self._loop.call_later(TURN_POLL_S, self._watch_turn)
 
     def _fits(self, nbytes: int) -> bool:
         """May a frame of `nbytes` go now? On a link measured thin (room below the maximum)
@@ -476,10 +411,6 @@ class ClientLink:
             self._summary_timer.cancel()
         if self._pace_timer is not None:
             self._pace_timer.cancel()
-        if self._turn_timer is not None:
-            self._turn_timer.cancel()
-        if self._turns is not None:
-            self._turns.give_back(self)
         self._log_summary()
         self._progress.set()
 
@@ -533,11 +464,6 @@ class ClientLink:
         """Bytes the kernel has taken from this link's transport so far."""
         return self._handed - self._transport.get_write_buffer_size()
 
-    def _progress_mark(self) -> tuple[int, int]:
-        """Changes while the link moves: its client takes bytes, or (waiting for a large-write
-        turn) other links' turns pass."""
-        return self._accepted_bytes(), self._turns.handoffs if self._turns is not None else 0
-
     def _note_progress(self) -> None:
         self._progress.set()
         if self.queue.lossless_bytes <= self.pause_bytes:
@@ -575,15 +501,15 @@ class ClientLink:
     async def drained(self) -> None:
         """Return once the queue is under `pause_bytes`, or the link has proved stalled or
         slow (it then drops instead of pacing anyone until it catches up)."""
-        mark, since = self._progress_mark(), self._loop.time()
+        mark, since = self._accepted_bytes(), self._loop.time()
         while self.wants_pause():
-            if not self._corked and not self._in_line:
+            if not self._corked:
                 self._await_drain()  # the transport tells when it is down to its low mark
             self._progress.clear()
             with contextlib.suppress(TimeoutError):
                 async with asyncio.timeout(POLL_S):
                     await self._progress.wait()
-            accepted = self._progress_mark()
+            accepted = self._accepted_bytes()
             if accepted != mark:
                 mark, since = accepted, self._loop.time()
             elif self._loop.time() - since > STALL_S:

@@ -124,11 +124,6 @@ class SendQueue:
         self._forget(item)
         return item
 
-    def waiting(self, key: str | None) -> int:
-        """Items of stream `key` (a topic, or None for answers) waiting here."""
-        stream = self._streams.get(key)
-        return len(stream) if stream is not None else 0
-
     def push_front(self, item: Waiting) -> None:
         """Put a popped item back at the head of its stream (keeping its place in line)."""
         key = item.send.drop_key

@@ -33,7 +33,6 @@ from bridge.intake import Intake
 from bridge.link import WRITE_HIGH_WATER, ClientLink, Delivered
 from bridge.outgoing import Delivery
 from bridge.reply_budget import POLICY_VIOLATION
-from bridge.turns import LargeWriteTurns
 
 if TYPE_CHECKING:
     from bridge.host import ProtocolConnection, ProtocolFactory
@@ -82,8 +81,6 @@ class BridgeServer:
         self.delivered: Delivered = no_observer  # told when a delivery's frames are written
         self.clients_changed: list[Callable[[], None]] = []  # after a client comes or goes
         self._holds: dict[int, int] = {}  # client id -> read nothing of it before (ns)
-        # Links take turns writing large frames (a scan fanned out: `bridge.turns`).
-        self.turns: LargeWriteTurns[ClientLink] = LargeWriteTurns(ClientLink.turn_granted)
 
         # Other protocols by websocket subprotocol (Foxglove's); a client offering none of
         # them speaks rosbridge v2. Their connections translate what the core sends them.
@@ -168,7 +165,6 @@ class BridgeServer:
             delivered=self.delivered,
             over_budget=lambda reason: self._close_over_budget(client_id, reason),
             node=self.core.state.sessions[client_id].node,
-            turns=self.turns,
         )
         paced: set[ClientLink] = set()  # links this client's messages went to that are full
 
