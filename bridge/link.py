@@ -252,7 +252,7 @@ class ClientLink:
         """The frames of `send`, or None (logged) if it cannot be encoded."""
         try:
             frames = render(
-                send.item, send.fragment_size, self._next_fragment_id(), self._link_rate()
+                send.item, send.fragment_size, self._fragment_id(send), self._link_rate()
             )
         except Exception as exc:  # one unencodable message must not cost the client anything else
             self._encode_failed(send, exc)
@@ -276,7 +276,7 @@ class ClientLink:
                 render,
                 waiting.send.item,
                 waiting.send.fragment_size,
-                self._next_fragment_id(),
+                self._fragment_id(waiting.send),
                 self._link_rate(),
             )
         except RuntimeError:  # the pool has shut down: the server is stopping
@@ -326,7 +326,10 @@ class ClientLink:
         if summary is not None:
             logger.warning("%s", summary)
 
-    def _next_fragment_id(self) -> str:
+    def _fragment_id(self, send: Send) -> str:
+        """A new id for the fragments of `send` if it may be fragmented (else none is used)."""
+        if send.fragment_size is None:
+            return ""
         self._fragment_seq += 1
         return f"fragment:{self._fragment_seq}"
 
