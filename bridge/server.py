@@ -24,6 +24,7 @@ from websockets.http11 import Request, Response
 from websockets.typing import Subprotocol
 
 from bridge.access import HandshakePolicy, handshake_token, tls_context
+from bridge.big_writes import BigWriteTurns
 from bridge.config import BridgeConfig
 from bridge.core import BridgeCore
 from bridge.effects import Close, DeadlineKey, Effect, Hold, Schedule, Send
@@ -80,6 +81,7 @@ class BridgeServer:
         self.delivered: Delivered = no_observer  # told when a delivery's frames are written
         self.clients_changed: list[Callable[[], None]] = []  # after a client comes or goes
         self._holds: dict[int, int] = {}  # client id -> read nothing of it before (ns)
+        self._big_writes = BigWriteTurns()  # large frames fanned out take turns
 
         # Other protocols by websocket subprotocol (Foxglove's); a client offering none of
         # them speaks rosbridge v2. Their connections translate what the core sends them.
@@ -166,6 +168,7 @@ class BridgeServer:
             delivered=self.delivered,
             over_budget=lambda reason: self._close_over_budget(client_id, reason),
             node=self.core.state.sessions[client_id].node,
+            turns=self._big_writes,
         )
         paced: set[ClientLink] = set()  # links this client's messages went to that are full
 
