@@ -26,7 +26,7 @@ gives the relay's CPU seconds per 10,000 relayed messages (deliveries; a call co
 
 Usage: python -m benchmarks.relay [--only burst,sustained,scan,fanout,service]
        [--encodings json,cbor] [--repeat N [--interleave]] [--compare /work/main] [--uvloop]
-       [--floor] [--url ws://host:port] [-- bridge options...]
+       [--floor] [--picows] [--url ws://host:port] [-- bridge options...]
 With --compare (another checkout's bridge), --uvloop (this bridge on uvloop instead of the
 standard loop) or --floor (a bare websockets relay that forwards frames unvalidated), the
 relays run in turn and the medians are printed side by side with their ratios to the floor.
@@ -63,6 +63,7 @@ from __future__ import annotations
 import argparse
 import asyncio
 import contextlib
+import importlib.util
 import multiprocessing as mp
 import os
 import re
@@ -76,6 +77,7 @@ from typing import Any
 
 import numpy as np
 
+from benchmarks.picows_floor import run_picows_floor
 from benchmarks.relay_roles import FANOUT, SUBSCRIBER_PROCESSES, TOPICS, cpu_s, run_role
 from schemas.runtime.event_loop import EVENT_LOOP_ENV
 from schemas.runtime.process import MALLOC_ENV as TUNED_MALLOC
@@ -278,6 +280,12 @@ def start_targets(args: argparse.Namespace) -> list[Target]:
         floor = ctx.Process(target=run_floor, args=(pipe,), daemon=True)
         floor.start()
         targets.append(Target("floor", f"ws://127.0.0.1:{end.recv()}", floor.pid, floor.terminate))
+    if args.picows:  # the same bare relay on picows: what a faster I/O layer would win
+        ctx = mp.get_context("spawn")
+        end, pipe = ctx.Pipe()
+        relay = ctx.Process(target=run_picows_floor, args=(pipe,), daemon=True)
+        relay.start()
+        targets.append(Target("picows", f"ws://127.0.0.1:{end.recv()}", relay.pid, relay.terminate))
     return targets
 
 
@@ -392,8 +400,15 @@ def main(argv: list[str] | None = None) -> int:
         action="store_true",
         help="also run a bare websockets relay (no validation), the floor",
     )
+    parser.add_argument(
+        "--picows",
+        action="store_true",
+        help="also run the bare relay on picows (benchmarks/picows_floor.py; pip install picows)",
+    )
     parser.add_argument("bridge_args", nargs="*", help="options for `python -m bridge`")
     args = parser.parse_args(argv)
+    if args.picows and importlib.util.find_spec("picows") is None:
+        parser.error("argument --picows: picows is not installed (pip install picows)")
     unknown = set(args.only.split(",")) - set(TOPICS)
     if unknown:
         parser.error(f"argument --only: unknown workload(s) {', '.join(sorted(unknown))}")
