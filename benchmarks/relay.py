@@ -64,7 +64,9 @@ bridge's CPU per 10,000 was 0.5-0.7 s against main's 0.5-0.8 s. Fan-out of the C
 16 subscribers with large frames taking turns (`bridge.big_writes`; `--compare <main> --only
 scan,fanout --encodings cbor`, load 0.6-2.2): every scan delivered, scan p50 1.34x the relay's
 (main 1.65x), scan p99 0.92x, IMU p99 0.33x (main 1.03x), IMU p50 2.3 ms (relay 1.2 ms);
-another sitting at load 2.1-4.1: scan p50 1.32x, IMU p99 0.25x. One-connection CBOR scan
+another sitting at load 2.1-4.1: scan p50 1.32x, IMU p99 0.25x; a third, quiet (load 0.7-1.5):
+scan p50 1.09x, p99 1.13x, IMU p99 0.27x (one slot instead of two: scan p50 1.22x, IMU p99
+0.14x; two kept). One-connection CBOR scan
 (quiet, `--compare <main> --only scan --encodings cbor --repeat 5`): scan p50 14.5 ms against
 main's 14.3 ms, IMU p99 7.5 against 5.8 ms. Service round trip (load 2.6-4.8): p50 0.8 ms
 (main 0.8, relay 0.5), p95 1.5 ms (main 3.1, relay 1.6). Idle: 71 MiB RSS, 0-0.5 % CPU (the
