@@ -26,7 +26,7 @@ gives the relay's CPU seconds per 10,000 relayed messages (deliveries; a call co
 
 Usage: python -m benchmarks.relay [--only burst,sustained,scan,fanout,service]
        [--encodings json,cbor] [--repeat N [--interleave]] [--compare /work/main] [--uvloop]
-       [--floor] [--url ws://host:port] [-- bridge options...]
+       [--floor] [--picows] [--url ws://host:port] [-- bridge options...]
 With --compare (another checkout's bridge), --uvloop (this bridge on uvloop instead of the
 standard loop) or --floor (a bare websockets relay that forwards frames unvalidated), the
 relays run in turn and the medians are printed side by side with their ratios to the floor.
@@ -54,6 +54,24 @@ every scan delivered, scan p50 1.55-2.0x and IMU p99 1.07-1.8x the relay's (the 
 figures moved 2x between runs); service round trip p50 0.9 ms (relay 0.6), p95 2.6 ms (2.4).
 Idle: 60 MiB RSS and 0 % CPU (80 MiB before OpenCV became a lazy import; the relay 41 MiB).
 
+Measured 2026-11-26, second sitting of issue 21 (medians of 3 interleaved runs; ratios to the
+bare relay of the same run). Small messages, quiet (`--floor --picows --compare <main> --only
+burst,sustained --repeat 3 --interleave --seconds 5`, load 0.4-2.1): this bridge 0.36-0.46x
+the relay (18,500-22,900 msg/s, lossless), main 0.38-0.47x: level; CPU 0.4-0.5 s per 10,000
+relayed for both against the relay's 0.2 s and the picows relay's 0.1 s (which moved
+0.84-1.14x the websockets relay's rate: the clients bound both). Under load (3.3-5.5) the
+bridge's CPU per 10,000 was 0.5-0.7 s against main's 0.5-0.8 s. Fan-out of the CBOR scan to
+16 subscribers with large frames taking turns (`bridge.big_writes`; `--compare <main> --only
+scan,fanout --encodings cbor`, load 0.6-2.2): every scan delivered, scan p50 1.34x the relay's
+(main 1.65x), scan p99 0.92x, IMU p99 0.33x (main 1.03x), IMU p50 2.3 ms (relay 1.2 ms);
+another sitting at load 2.1-4.1: scan p50 1.32x, IMU p99 0.25x; a third, quiet (load 0.7-1.5):
+scan p50 1.09x, p99 1.13x, IMU p99 0.27x (one slot instead of two: scan p50 1.22x, IMU p99
+0.14x; two kept). One-connection CBOR scan
+(quiet, `--compare <main> --only scan --encodings cbor --repeat 5`): scan p50 14.5 ms against
+main's 14.3 ms, IMU p99 7.5 against 5.8 ms. Service round trip (load 2.6-4.8): p50 0.8 ms
+(main 0.8, relay 0.5), p95 1.5 ms (main 3.1, relay 1.6). Idle: 71 MiB RSS, 0-0.5 % CPU (the
+relay 41 MiB).
+
 The bare relay forwards the publisher's frame as it came and validates nothing: on one
 connection its scan and IMU figures are what the clients, the copies and the kernel cost here.
 """
@@ -63,6 +81,7 @@ from __future__ import annotations
 import argparse
 import asyncio
 import contextlib
+import importlib.util
 import multiprocessing as mp
 import os
 import re
@@ -76,6 +95,7 @@ from typing import Any
 
 import numpy as np
 
+from benchmarks.picows_floor import run_picows_floor
 from benchmarks.relay_roles import FANOUT, SUBSCRIBER_PROCESSES, TOPICS, cpu_s, run_role
 from schemas.runtime.event_loop import EVENT_LOOP_ENV
 from schemas.runtime.process import MALLOC_ENV as TUNED_MALLOC
@@ -278,6 +298,12 @@ def start_targets(args: argparse.Namespace) -> list[Target]:
         floor = ctx.Process(target=run_floor, args=(pipe,), daemon=True)
         floor.start()
         targets.append(Target("floor", f"ws://127.0.0.1:{end.recv()}", floor.pid, floor.terminate))
+    if args.picows:  # the same bare relay on picows: what a faster I/O layer would win
+        ctx = mp.get_context("spawn")
+        end, pipe = ctx.Pipe()
+        relay = ctx.Process(target=run_picows_floor, args=(pipe,), daemon=True)
+        relay.start()
+        targets.append(Target("picows", f"ws://127.0.0.1:{end.recv()}", relay.pid, relay.terminate))
     return targets
 
 
@@ -392,8 +418,15 @@ def main(argv: list[str] | None = None) -> int:
         action="store_true",
         help="also run a bare websockets relay (no validation), the floor",
     )
+    parser.add_argument(
+        "--picows",
+        action="store_true",
+        help="also run the bare relay on picows (benchmarks/picows_floor.py; pip install picows)",
+    )
     parser.add_argument("bridge_args", nargs="*", help="options for `python -m bridge`")
     args = parser.parse_args(argv)
+    if args.picows and importlib.util.find_spec("picows") is None:
+        parser.error("argument --picows: picows is not installed (pip install picows)")
     unknown = set(args.only.split(",")) - set(TOPICS)
     if unknown:
         parser.error(f"argument --only: unknown workload(s) {', '.join(sorted(unknown))}")

@@ -15,6 +15,9 @@ loopback never sees less). So on a thin link a scan is not handed to the socket 
 fragments go one at a time, and an IMU sample waits for at most one fragment. While the kernel
 holds the surplus a timer, not the transport, says when to look again.
 
+A frame of `BIG_BYTES` or more waits for this link's turn (`bridge.big_writes`): fanned out to
+sixteen links, the copies go out two at a time; small messages pass it meanwhile.
+
 Large messages whose encode is not just C code holding the GIL are encoded on a worker thread
 (JSON with base64, PNG, CDR); their topic waits for the encode (order per topic), other topics
 keep flowing past it.
@@ -45,6 +48,7 @@ from concurrent.futures import Executor
 from websockets.asyncio.server import ServerConnection
 from websockets.protocol import State
 
+from bridge.big_writes import BIG_BYTES, BigWriteTurns
 from bridge.effects import Send
 from bridge.goodput import GoodputMeter, LinkHealth
 from bridge.outgoing import CBOR, CBOR_RAW, Delivery, WireFrame, render
@@ -100,6 +104,7 @@ class ClientLink:
         delivered: Delivered,
         over_budget: Callable[[str], None],
         node: str | None = None,
+        turns: BigWriteTurns | None = None,
     ) -> None:
         self.client_id = client_id
         self.node = node or f"client {client_id}"  # names the client in log lines
@@ -142,6 +147,12 @@ class ClientLink:
         self._stalled = False
         self._problems = ProblemLog()  # messages that could not be encoded
         self._summary_timer: asyncio.TimerHandle | None = None
+        # Large frames take turns with other links' (`bridge.big_writes`): the bytes of the
+        # queued one waiting for its turn (they do not pace publishers, as if in the socket),
+        # and whether one went out in this link's current turn.
+        self._turns = turns if turns is not None else BigWriteTurns(slots=1 << 30)
+        self._waiting_turn_bytes = 0
+        self._big_out = False
 
     # -- sending -----------------------------------------------------------------------------
 
@@ -158,7 +169,7 @@ class ClientLink:
             frames = self._render(send)
             if frames is None:
                 return False
-            if len(frames) == 1:
+            if len(frames) == 1 and self._may_write(send, frames[0]):
                 self._write(send, frames)
                 return False
             self._enqueue(send, frames)  # fragments leave one at a time, others between them
@@ -195,6 +206,8 @@ class ClientLink:
     def _service(self) -> None:
         """Write waiting messages while the socket has room, a fragment at a time."""
         blocked = False
+        if self._big_out and self._has_room():  # the large frame of this turn has left
+            self._end_turn()
         while self._has_room():
             waiting = self.queue.pop(self._busy)
             if waiting is None:
@@ -208,6 +221,10 @@ class ClientLink:
                 self.queue.push_front(waiting)
                 blocked = True
                 break
+            if not self._may_write(waiting.send, piece):
+                self.queue.push_front(waiting)
+                self._waiting_turn_bytes = waiting.nbytes
+                break
             if waiting.send.drop_key is None and not waiting.started:
                 self.replies.credit(waiting.nbytes)  # answers are rendered when queued
             if waiting.first == len(frames) - 1:
@@ -217,7 +234,32 @@ class ClientLink:
                 self.queue.requeue(waiting, len(piece.data))
         if len(self.queue) and not self._corked and (blocked or not self._has_room()):
             self._wait_for_room()
+        elif self._big_out and not self._corked:
+            self._wait_for_room()  # (to end the turn once the frame has left)
+        elif not self._big_out and self._turns.holds(self.client_id):
+            self._end_turn()  # given a turn it had no large frame left to use
         self._note_progress()
+
+    def _may_write(self, send: Send, frame: WireFrame) -> bool:
+        """May `frame` go now? A large one only in this link's turn (`bridge.big_writes`)."""
+        if len(frame.data) < BIG_BYTES:
+            return True
+        if not self._turns.take(self.client_id, self._turn_given):
+            return False
+        self._waiting_turn_bytes = 0
+        self._big_out = True
+        return True
+
+    def _turn_given(self) -> None:
+        self._waiting_turn_bytes = 0
+        if self.closed:
+            self._turns.release(self.client_id)
+        else:
+            self._service()
+
+    def _end_turn(self) -> None:
+        self._big_out = False
+        self._turns.release(self.client_id)
 
     def _fits(self, nbytes: int) -> bool:
         """May a frame of `nbytes` go now? On a link measured thin (room below the maximum)
@@ -252,7 +294,7 @@ class ClientLink:
         """The frames of `send`, or None (logged) if it cannot be encoded."""
         try:
             frames = render(
-                send.item, send.fragment_size, self._next_fragment_id(), self._link_rate()
+                send.item, send.fragment_size, self._fragment_id(send), self._link_rate()
             )
         except Exception as exc:  # one unencodable message must not cost the client anything else
             self._encode_failed(send, exc)
@@ -276,7 +318,7 @@ class ClientLink:
                 render,
                 waiting.send.item,
                 waiting.send.fragment_size,
-                self._next_fragment_id(),
+                self._fragment_id(waiting.send),
                 self._link_rate(),
             )
         except RuntimeError:  # the pool has shut down: the server is stopping
@@ -326,7 +368,10 @@ class ClientLink:
         if summary is not None:
             logger.warning("%s", summary)
 
-    def _next_fragment_id(self) -> str:
+    def _fragment_id(self, send: Send) -> str:
+        """A new id for the fragments of `send` if it may be fragmented (else none is used)."""
+        if send.fragment_size is None:
+            return ""
         self._fragment_seq += 1
         return f"fragment:{self._fragment_seq}"
 
@@ -366,7 +411,7 @@ class ClientLink:
         for delivery, nbytes in self._just_delivered:
             self._delivered(self.client_id, delivery, nbytes, now_ns)
         self._just_delivered.clear()
-        if len(self.queue):
+        if len(self.queue) or self._big_out:
             self._service()
         else:
             self._note_progress()
@@ -411,6 +456,7 @@ class ClientLink:
             self._summary_timer.cancel()
         if self._pace_timer is not None:
             self._pace_timer.cancel()
+        self._end_turn()
         self._log_summary()
         self._progress.set()
 
@@ -464,9 +510,13 @@ class ClientLink:
         """Bytes the kernel has taken from this link's transport so far."""
         return self._handed - self._transport.get_write_buffer_size()
 
+    def _paced_bytes(self) -> int:
+        """Queued bytes publishers wait for: not a large frame only waiting for its turn."""
+        return self.queue.lossless_bytes - self._waiting_turn_bytes
+
     def _note_progress(self) -> None:
         self._progress.set()
-        if self.queue.lossless_bytes <= self.pause_bytes:
+        if self._paced_bytes() <= self.pause_bytes:
             self._backed_up_since = None
             self._stalled = False
 
@@ -477,7 +527,7 @@ class ClientLink:
 
     def wants_pause(self) -> bool:
         """Should readers feeding this link wait for it before reading on?"""
-        if self.gone or self._stalled or self.queue.lossless_bytes <= self.pause_bytes:
+        if self.gone or self._stalled or self._paced_bytes() <= self.pause_bytes:
             return False
         now = self._loop.time()
         if self._backed_up_since is None:
@@ -512,7 +562,7 @@ class ClientLink:
             accepted = self._accepted_bytes()
             if accepted != mark:
                 mark, since = accepted, self._loop.time()
-            elif self._loop.time() - since > STALL_S:
+            elif self._loop.time() - since > STALL_S and not self._waiting_turn_bytes:
                 self._give_up(f"took no byte for {STALL_S:g} s")
 
     async def answers_taken(self, limit: int) -> None:

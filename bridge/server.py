@@ -3,10 +3,11 @@
 Everything protocol-related happens in `BridgeCore`; this module only pumps frames into it and
 carries out the effects it returns. Each connection has an `Intake` (inbound: big frames decoded
 on a worker, order kept per topic) and a `ClientLink` (outbound: write-through while the socket
-has room, a byte-bounded backlog when it has not). Readers take fair turns: after `TURN_S` of
-handling frames a reader yields, so the frames it produced go out and other clients get read;
-a reader also waits while the clients its messages go to are backed up (TCP backpressure on the
-publisher), and while its own client leaves too many answers unread.
+has room, a byte-bounded backlog when it has not). Messages come straight from websockets'
+parser (`bridge.reading`, no `recv()` task per frame). Readers take fair turns: after
+`TURN_S` of handling one chunk a reader pauses, so the frames it produced go out and other
+clients get read; a reader also waits while the clients its messages go to are backed up (TCP
+backpressure on the publisher), and while its own client leaves too many answers unread.
 """
 
 from __future__ import annotations
@@ -19,11 +20,11 @@ from concurrent.futures import ThreadPoolExecutor
 from typing import TYPE_CHECKING
 
 from websockets.asyncio.server import Server, ServerConnection, serve
-from websockets.exceptions import ConnectionClosed
 from websockets.http11 import Request, Response
 from websockets.typing import Subprotocol
 
 from bridge.access import HandshakePolicy, handshake_token, tls_context
+from bridge.big_writes import BigWriteTurns
 from bridge.config import BridgeConfig
 from bridge.core import BridgeCore
 from bridge.effects import Close, DeadlineKey, Effect, Hold, Schedule, Send
@@ -32,6 +33,7 @@ from bridge.http import HttpRoutes
 from bridge.intake import Intake
 from bridge.link import WRITE_HIGH_WATER, ClientLink, Delivered
 from bridge.outgoing import Delivery
+from bridge.reading import FrameConnection, Reader, read_until_closed
 from bridge.reply_budget import POLICY_VIOLATION
 
 if TYPE_CHECKING:
@@ -46,8 +48,6 @@ CLOSE_TIMEOUT_S = 3.0
 # the bridge stops reading its requests: a client that calls without reading then waits on
 # TCP instead of growing the bridge's memory.
 ANSWER_BACKLOG = 256
-# Longest stretch a reader handles frames before it lets the loop write and read elsewhere.
-TURN_S = 0.001
 # Frames of one connection taken but not yet handled (decoding on a worker, or waiting behind
 # one) before the bridge stops reading that connection.
 INTAKE_FRAMES = 256
@@ -81,6 +81,7 @@ class BridgeServer:
         self.delivered: Delivered = no_observer  # told when a delivery's frames are written
         self.clients_changed: list[Callable[[], None]] = []  # after a client comes or goes
         self._holds: dict[int, int] = {}  # client id -> read nothing of it before (ns)
+        self._big_writes = BigWriteTurns()  # large frames fanned out take turns
 
         # Other protocols by websocket subprotocol (Foxglove's); a client offering none of
         # them speaks rosbridge v2. Their connections translate what the core sends them.
@@ -107,6 +108,7 @@ class BridgeServer:
             close_timeout=CLOSE_TIMEOUT_S,
             process_request=self._process_request,
             select_subprotocol=self._select_subprotocol,
+            create_connection=FrameConnection,
             ssl=tls_context(self.config),
         )
 
@@ -150,6 +152,7 @@ class BridgeServer:
     # -- one connection ----------------------------------------------------------------------
 
     async def _handle(self, ws: ServerConnection) -> None:
+        assert isinstance(ws, FrameConnection)  # (serve's create_connection)
         if self.config.max_clients is not None and len(self.links) >= self.config.max_clients:
             await ws.close(TRY_AGAIN_LATER, "too many clients")
             return
@@ -165,6 +168,7 @@ class BridgeServer:
             delivered=self.delivered,
             over_budget=lambda reason: self._close_over_budget(client_id, reason),
             node=self.core.state.sessions[client_id].node,
+            turns=self._big_writes,
         )
         paced: set[ClientLink] = set()  # links this client's messages went to that are full
 
@@ -179,28 +183,10 @@ class BridgeServer:
         self._tell_clients_changed()
         token = handshake_token(ws.request) if ws.request is not None else None
         self.apply(self.core.admit(client_id, time.time_ns(), token))
+        reader = self._reader(ws, intake, other, link, paced, client_id)
         try:
-            if other is not None:
-                await self._read_other(ws, other, link, paced, client_id)
-                return
-            busy_s = 0.0  # time spent handling this client's frames since it last yielded
-            async for data in ws:
-                started = time.perf_counter()
-                intake.take(data, time.time_ns())
-                busy_s += time.perf_counter() - started
-                if (
-                    paced
-                    or busy_s > TURN_S
-                    or intake.in_flight > INTAKE_FRAMES
-                    or intake.pending_bytes > INTAKE_BYTES
-                    or link.queue.answers_waiting > ANSWER_BACKLOG
-                    or client_id in self._holds
-                ):
-                    await self._between_turns(link, intake, paced)
-                    await self._held(client_id)
-                    busy_s = 0.0
-        except ConnectionClosed as exc:
-            logger.info("client %d closed: %s", client_id, exc)
+            await read_until_closed(reader, ws)
+            logger.info("client %d closed: %s %s", client_id, ws.close_code, ws.close_reason)
         finally:
             intake.closed = True
             if other is not None:
@@ -212,43 +198,62 @@ class BridgeServer:
             self.apply(self.core.disconnect(client_id, time.time_ns()))
             self._tell_clients_changed()
 
+    def _reader(
+        self,
+        ws: FrameConnection,
+        intake: Intake,
+        other: ProtocolConnection | None,
+        link: ClientLink,
+        paced: set[ClientLink],
+        client_id: int,
+    ) -> Reader:
+        """The connection's reader: frames to the intake (or to another protocol's connection,
+        with the links its messages went to collected in `paced`), with fair turns, pacing by
+        backed-up subscribers, a wait while the client leaves answers unread, and holds."""
+        if other is None:
+
+            def handle(data: str | bytes) -> None:
+                intake.take(data, time.time_ns())
+
+            def must_wait() -> bool:
+                return bool(
+                    paced
+                    or intake.in_flight > INTAKE_FRAMES
+                    or intake.pending_bytes > INTAKE_BYTES
+                    or link.queue.answers_waiting > ANSWER_BACKLOG
+                    or client_id in self._holds
+                )
+
+        else:
+            receive = other.receive
+
+            def handle(data: str | bytes) -> None:
+                self._pacing = paced
+                try:
+                    receive(data)
+                finally:
+                    self._pacing = None
+
+            def must_wait() -> bool:
+                return bool(
+                    paced or link.queue.answers_waiting > ANSWER_BACKLOG or client_id in self._holds
+                )
+
+        async def wait() -> None:
+            while paced:
+                await paced.pop().drained()
+            await link.answers_taken(ANSWER_BACKLOG)
+            if other is None:
+                await intake.settled(INTAKE_FRAMES // 2, INTAKE_BYTES // 2)
+            await self._held(client_id)
+
+        return Reader(ws, handle, must_wait, wait)
+
     async def _held(self, client_id: int) -> None:
         """A client past its quota (`Hold`): wait until it has room, reading nothing of it."""
         until_ns = self._holds.pop(client_id, None)
         if until_ns is not None:
             await asyncio.sleep(max(0.0, (until_ns - time.time_ns()) / 1e9))
-
-    async def _read_other(
-        self,
-        ws: ServerConnection,
-        other: ProtocolConnection,
-        link: ClientLink,
-        paced: set[ClientLink],
-        client_id: int,
-    ) -> None:
-        """Frames of another protocol's client, with the same fair turns, the same pacing by
-        backed-up subscribers and the same hold past its quota as a rosbridge client's."""
-        busy_s = 0.0
-        async for data in ws:
-            started = time.perf_counter()
-            self._pacing = paced
-            try:
-                other.receive(data)
-            finally:
-                self._pacing = None
-            busy_s += time.perf_counter() - started
-            if (
-                paced
-                or busy_s > TURN_S
-                or link.queue.answers_waiting > ANSWER_BACKLOG
-                or client_id in self._holds
-            ):
-                await asyncio.sleep(0)
-                while paced:
-                    await paced.pop().drained()
-                await link.answers_taken(ANSWER_BACKLOG)
-                await self._held(client_id)
-                busy_s = 0.0
 
     def _tell_clients_changed(self) -> None:
         for callback in self.clients_changed:
@@ -258,15 +263,6 @@ class BridgeServer:
         """A client left more answers unread than its reply budget (`bridge.reply_budget`)."""
         logger.warning("client %d: closing, %s", client_id, reason)
         self.apply([Close(client_id, POLICY_VIOLATION, reason)])
-
-    @staticmethod
-    async def _between_turns(link: ClientLink, intake: Intake, paced: set[ClientLink]) -> None:
-        """Let the loop write and read elsewhere; read on once this client may go on."""
-        await asyncio.sleep(0)
-        while paced:
-            await paced.pop().drained()
-        await link.answers_taken(ANSWER_BACKLOG)
-        await intake.settled(INTAKE_FRAMES // 2, INTAKE_BYTES // 2)
 
     # -- effects -----------------------------------------------------------------------------
 

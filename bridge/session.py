@@ -65,9 +65,11 @@ class ClientSession:
         return sum(buffer.size_chars for buffer in self.fragments.values())
 
     def fragment_size_for(self, subscription: Subscription | None = None) -> int | None:
-        """Outgoing fragment threshold: the client-wide value, lowered by the subscription's."""
-        sizes = [self.fragment_size]
+        """Outgoing fragment threshold: the client-wide value, lowered by the subscription's.
+        (Asked once per message and subscriber: no lists.)"""
+        size = self.fragment_size
         if subscription is not None:
-            sizes.append(subscription.settings.fragment_size)
-        known = [s for s in sizes if s is not None]
-        return min(known) if known else None
+            own = subscription.settings.fragment_size
+            if own is not None and (size is None or own < size):
+                return own
+        return size
