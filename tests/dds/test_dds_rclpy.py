@@ -110,8 +110,11 @@ async def test_a_best_effort_publisher_is_read_with_default_options(ros2_node, b
 
 def assert_feedback_leads_to(feedback: list[list[int]], final: list[int]) -> None:
     """Feedback arrived, in order, each a growing prefix of the final sequence. (The last
-    may come after the result: rcl_action sends them on separate channels, as in ROS 2.)"""
-    assert feedback and feedback[0] == final[:3], feedback
+    may come after the result: rcl_action sends them on separate channels, as in ROS 2. The
+    first may be missed: feedback is volatile, and a server that has not yet learnt of the
+    bridge's feedback reader, adopted just before the goal, writes its first step to nobody,
+    as it would to any ROS 2 action client created just before its goal.)"""
+    assert feedback and len(feedback[0]) >= 3, feedback
     assert all(f == final[: len(f)] for f in feedback), feedback
     assert [len(f) for f in feedback] == sorted({len(f) for f in feedback}), feedback
 
