@@ -72,6 +72,12 @@ main's 14.3 ms, IMU p99 7.5 against 5.8 ms. Service round trip (load 2.6-4.8): p
 (main 0.8, relay 0.5), p95 1.5 ms (main 3.1, relay 1.6). Idle: 71 MiB RSS, 0-0.5 % CPU (the
 relay 41 MiB).
 
+With the per-message objects no longer frozen dataclasses (`--floor --compare <main> --only
+burst,sustained,service --repeat 3 --interleave --seconds 5`, load 1.2-3.2): small messages
+0.51-0.63x the relay (main 0.45-0.59x), CPU 0.7-0.8 s per 10,000 relayed (main 0.8-0.9, the
+relay 0.3); service round trip p50 0.7 ms (main 0.9, relay 0.5), p95 1.0 ms (main 1.4, relay
+0.8), 0.85x the relay's calls/s (main 0.62x).
+
 The bare relay forwards the publisher's frame as it came and validates nothing: on one
 connection its scan and IMU figures are what the clients, the copies and the kernel cost here.
 """

@@ -14,7 +14,9 @@ from bridge.outgoing import Outgoing
 DeadlineKey = tuple[str | int, ...]
 
 
-@dataclass(frozen=True, slots=True)
+# Not frozen: one is built per message and subscriber, and a frozen dataclass takes ~4x as
+# long to build (970 against 260 ns here); treat it as immutable all the same.
+@dataclass(slots=True)
 class Send:
     """Queue `item` for client `client_id`.
 

@@ -39,7 +39,7 @@ MIN_FRAGMENT_SIZE = 1000
 COMPRESSION_RANK = {JSON: 0, PNG: 1, CBOR: 2, CBOR_RAW: 3}
 
 
-@dataclass(frozen=True, slots=True)
+@dataclass(slots=True)  # (not frozen, as `Delivery`: one per message)
 class WireFrame:
     """One websocket frame: `data` is UTF-8 JSON when `text`, else binary (CBOR);
     `reduction` says what was done to a thinned point cloud (on its first frame)."""
@@ -153,7 +153,8 @@ class TopicMessage:
         return WireFrame(publish_json(topic, self.msg), text=True)
 
 
-@dataclass(frozen=True, slots=True)
+# Not frozen, like `bridge.effects.Send`: one per message and subscriber; treat as immutable.
+@dataclass(slots=True)
 class Delivery:
     """A topic message for one client: its topic spelling, chosen encoding and, for a point
     cloud, the reduction its subscription asked for (`bridge.reduction`)."""
@@ -210,7 +211,7 @@ class ControlMessage:
         return WireFrame(codec_json.dumps(self.payload), text=True)
 
 
-@dataclass(frozen=True, slots=True)
+@dataclass(slots=True)  # (not frozen, as `Delivery`: one per message)
 class RawFrame:
     """A frame built by another protocol's translator (Foxglove): sent as it is, never dropped
     unless given a drop key."""

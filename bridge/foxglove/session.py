@@ -45,7 +45,7 @@ def allow_all(action: str, name: str) -> str | None:
     return None
 
 
-@dataclass(frozen=True, slots=True)
+@dataclass(slots=True)  # (not frozen, as its base `Delivery`)
 class FoxgloveDelivery(Delivery):
     """A topic message for one Foxglove subscription: MessageData around the shared CDR."""
 
