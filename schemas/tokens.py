@@ -4,16 +4,14 @@
 one: the rosauth `auth` op's `mac`, `Authorization: Bearer`, or `?token=`. A token carries the
 role (`role`), the principal (`sub`), when it was issued (`iat`) and when it ends (`exp`).
 The time is passed in (`now_s`), never read here, so the check is the same in the sans-I/O
-core and in tests with a fake clock.
+core and in tests with a fake clock. PyJWT (which loads `cryptography`) is imported with the
+first token: ~8 MiB of resident memory that a bridge nobody presents a token to never carries.
 """
 
 from __future__ import annotations
 
 import warnings
 from dataclasses import dataclass
-
-import jwt
-from jwt.warnings import InsecureKeyLengthWarning
 
 ALGORITHM = "HS256"
 # Clocks of the issuing host and the bridge may differ a little.
@@ -52,6 +50,9 @@ def issue(secret: str, role: str, subject: str, now_s: float, ttl_s: float | Non
     claims: dict[str, object] = {"sub": subject, "role": role, "iat": int(now_s)}
     if ttl_s is not None:
         claims["exp"] = int(now_s + ttl_s)
+    import jwt
+    from jwt.warnings import InsecureKeyLengthWarning
+
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", InsecureKeyLengthWarning)
         return jwt.encode(claims, secret, algorithm=ALGORITHM)
@@ -61,6 +62,9 @@ def verify(secret: str, token: str, now_s: float) -> Claims:
     """The claims of a token signed with `secret` and valid at `now_s` (else TokenError)."""
     if len(token) > MAX_TOKEN_CHARS:
         raise TokenError("token too long")
+    import jwt
+    from jwt.warnings import InsecureKeyLengthWarning
+
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", InsecureKeyLengthWarning)
