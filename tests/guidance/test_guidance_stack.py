@@ -45,13 +45,17 @@ vertical_resolution_deg = 1.5
 [camera]
 width_px = 96
 height_px = 72
+[command]
+timeout_s = 0.5
 """
 GUIDANCE = GuidanceConfig()
 VESSEL = VesselConfig()
 DRIVE_TIMEOUT_S = 150.0  # 200 m at 3.5 m/s is ~60 s; a loaded machine slows the loop (stale)
 FAULT_TIMEOUT_S = 40.0
-# zero thrust at ~3.5 m/s decelerates the hull by ~1 m/s^2 (VesselConfig damping); the timeout
-# (1 s) plus a restart leaves it unpowered for over a second
+# zero thrust at ~3.5 m/s decelerates the hull by ~1 m/s^2 (VesselConfig damping). The command
+# timeout is 0.5 s here (1 s by default): `up` has guidance back ~1-1.5 s after the kill, and
+# with the default a quick restart left the hull unpowered too briefly to slow it by this much
+# (failed once in a full run)
 SLOWED_BY_MPS = 0.3
 UNDER_WAY_MPS = 3.0  # guidance cruises at 3.5 m/s (config/guidance.toml)
 
