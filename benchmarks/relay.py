@@ -78,6 +78,15 @@ burst,sustained,service --repeat 3 --interleave --seconds 5`, load 1.2-3.2): sma
 relay 0.3); service round trip p50 0.7 ms (main 0.9, relay 0.5), p95 1.0 ms (main 1.4, relay
 0.8), 0.85x the relay's calls/s (main 0.62x).
 
+End of that session, quiet, before and after the whole of it (`nice -n -15 python -m
+benchmarks.relay --floor --compare <checkout of bf1f834> --repeat 3 --interleave --seconds 5`,
+load 0.8-1.9; ratios to the bare relay of the same run, after / before): burst JSON 0.42 / 0.46,
+burst CBOR 0.39 / 0.35, sustained JSON 0.52 / 0.44, sustained CBOR 0.46 / 0.39, all lossless,
+CPU 0.7-0.8 / 0.8-1.0 s per 10,000 relayed (relay 0.3); fan-out scan p50 1.15 / 1.42, scan p99
+0.77 / 0.76, IMU p99 0.25 / 0.83, every scan delivered; one-connection CBOR scan p50 1.01 /
+1.00; service round trip p50 0.7 / 1.0 ms (relay 0.5), p95 1.2 / 1.5 ms, calls/s 0.71 / 0.55;
+idle RSS 62 / 71 MiB (PyJWT now imported with the first token; the relay 40 MiB).
+
 The bare relay forwards the publisher's frame as it came and validates nothing: on one
 connection its scan and IMU figures are what the clients, the copies and the kernel cost here.
 """
