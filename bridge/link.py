@@ -82,6 +82,20 @@ PACE_MIN_S, PACE_MAX_S = 0.001, 0.02  # when the kernel holds the surplus, look 
 Delivered = Callable[[int, Delivery, int, int], None]  # client, delivery, wire bytes, ns
 
 
+def frame_header(text: bool, size: int) -> bytes:
+    """The header of an unmasked, final server frame of `size` bytes (RFC 6455 §5.2).
+
+    websockets' `send_text` builds a `Frame`, checks it and copies header and payload into a
+    new buffer; a 5.5 MB scan fanned out to 16 clients was copied 16 times that way.
+    """
+    first = 0x81 if text else 0x82
+    if size < 126:
+        return bytes((first, size))
+    if size < 65536:
+        return struct.pack("!BBH", first, 126, size)
+    return struct.pack("!BBQ", first, 127, size)
+
+
 def estimated_size(send: Send) -> int:
     """Frame bytes of a large item before it is encoded: JSON spells bytes in base64."""
     item = send.item
@@ -153,6 +167,9 @@ class ClientLink:
         self._turns = turns if turns is not None else BigWriteTurns(slots=1 << 30)
         self._waiting_turn_bytes = 0
         self._big_out = False
+        # Frames are built here, not by websockets, when nothing transforms them (no
+        # extension, no debug log): a server frame is a 2-10 byte header and the payload.
+        self._own_framing = not self._protocol.extensions and not self._protocol.debug
 
     # -- sending -----------------------------------------------------------------------------
 
@@ -385,12 +402,25 @@ class ClientLink:
         if protocol.state is not State.OPEN:
             return
         nbytes = 0
-        for frame in frames:
-            if frame.text:
-                protocol.send_text(frame.data)
-            else:
-                protocol.send_binary(frame.data)
-            nbytes += len(frame.data)
+        if self._own_framing and not protocol.expect_continuation_frame:
+            writes = protocol.writes
+            for frame in frames:
+                data = frame.data
+                size = len(data)
+                header = frame_header(frame.text, size)
+                if size < JOIN_LIMIT:
+                    writes.append(header + data)
+                else:  # the shared buffer itself, not a copy per subscriber
+                    writes.append(header)
+                    writes.append(data)
+                nbytes += size
+        else:
+            for frame in frames:
+                if frame.text:
+                    protocol.send_text(frame.data)
+                else:
+                    protocol.send_binary(frame.data)
+                nbytes += len(frame.data)
         self._corked += nbytes
         self.frames_sent += len(frames)
         if final and isinstance(send.item, Delivery):

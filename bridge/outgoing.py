@@ -17,6 +17,7 @@ from bridge.reduction import CloudReducer, ReduceRequest, Reduction, budget_for_
 from schemas import codec_json
 from schemas.codec_cdr import to_cdr
 from schemas.codec_png import encode_png_op
+from schemas.errors import SchemaError
 from schemas.frames import (
     fragments_cbor,
     fragments_json,
@@ -150,7 +151,14 @@ class TopicMessage:
             return WireFrame(publish_cbor_raw(topic, self.serialized(), self.stamp_ns), text=False)
         if encoding == PNG:
             return WireFrame(encode_png_op(self.frame(JSON, topic).data), text=True)
-        return WireFrame(publish_json(topic, self.msg), text=True)
+        return WireFrame(publish_json(topic, self.msg, widen=self._has_float32()), text=True)
+
+    def _has_float32(self) -> bool:
+        """Whether the message may hold float32 arrays, which JSON must widen (its type says)."""
+        try:
+            return self.registry.message(self.type_name).has_float32_sequence
+        except SchemaError:
+            return True
 
 
 # Not frozen, like `bridge.effects.Send`: one per message and subscriber; treat as immutable.

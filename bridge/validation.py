@@ -56,6 +56,8 @@ def check_message(
         msg = normalize(spec, raw, now_ns=now_ns)
     except SchemaError as exc:
         return InvalidMessage(spec, str(exc))
+    if spec.bulk_free:  # (no bytes or arrays to count)
+        return ValidMessage(spec, msg, wire_bytes)
     return ValidMessage(spec, msg, max(wire_bytes, payload_bytes(msg)))
 
 

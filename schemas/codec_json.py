@@ -93,9 +93,14 @@ def _widen_float32(obj: Any) -> Any:
     return obj
 
 
-def dumps(obj: Any) -> bytes:
-    """Serialize to compact, pure-ASCII JSON; ``bytes`` -> base64, NaN/±Inf -> ``null``."""
-    obj = _widen_float32(obj)
+def dumps(obj: Any, *, widen: bool = True) -> bytes:
+    """Serialize to compact, pure-ASCII JSON; ``bytes`` -> base64, NaN/±Inf -> ``null``.
+
+    ``widen=False`` skips the walk for float32 arrays, for a caller that knows from the
+    message's type that it holds none (`MessageSpec.has_float32_sequence`).
+    """
+    if widen:
+        obj = _widen_float32(obj)
     try:
         out = orjson.dumps(obj, default=_default, option=_OPTIONS)
     except orjson.JSONEncodeError:

@@ -16,12 +16,17 @@ from schemas.values import Message, OpId
 _NS_PER_S = 1_000_000_000
 
 
-def publish_json(topic: str, msg: Message, reduced: Message | None = None) -> bytes:
+def publish_json(
+    topic: str, msg: Message, reduced: Message | None = None, *, widen: bool = True
+) -> bytes:
     """Text frame ``{"op":"publish","topic":T,"msg":M}`` (ASCII JSON, bytes as base64), with
-    ``"reduced":R`` after ``msg`` when the bridge thinned the message (docs/bridge.md)."""
+    ``"reduced":R`` after ``msg`` when the bridge thinned the message (docs/bridge.md);
+    ``widen=False``: `msg` is known to hold no float32 array (`codec_json.dumps`)."""
     if reduced is not None:
-        return codec_json.dumps({"op": "publish", "topic": topic, "msg": msg, "reduced": reduced})
-    return codec_json.dumps({"op": "publish", "topic": topic, "msg": msg})
+        return codec_json.dumps(
+            {"op": "publish", "topic": topic, "msg": msg, "reduced": reduced}, widen=widen
+        )
+    return codec_json.dumps({"op": "publish", "topic": topic, "msg": msg}, widen=widen)
 
 
 def publish_cbor(topic: str, msg: Message, reduced: Message | None = None) -> bytes:

@@ -325,7 +325,7 @@ _NORMALIZERS: dict[str, _Normalizer] = {
 def _message(spec: MessageSpec, raw: JsonValue, now_ns: int) -> Message:
     if spec.name in primitives.TIME_TYPES:
         return _time(spec, raw, now_ns)
-    if not isinstance(raw, Mapping):
+    if type(raw) is not dict and not isinstance(raw, Mapping):
         raise _FieldError(f"expected an object for {spec.name}, got {_describe(raw)}")
     stamp_now = spec.name == primitives.HEADER_TYPE
     out = {}
@@ -358,8 +358,8 @@ ROS1_HEADER_SEQ = "seq"
 
 def has_ros1_header_seq(raw: JsonValue) -> bool:
     """Whether a published message's top-level `header` carries ROS 1's `seq`."""
-    header = raw.get("header") if isinstance(raw, Mapping) else None
-    return isinstance(header, Mapping) and ROS1_HEADER_SEQ in header
+    header = raw.get("header") if type(raw) is dict or isinstance(raw, Mapping) else None
+    return (type(header) is dict or isinstance(header, Mapping)) and ROS1_HEADER_SEQ in header
 
 
 def normalize(spec: MessageSpec, raw: JsonValue, *, now_ns: int) -> Message:
@@ -411,12 +411,22 @@ def payload_bytes(value: Any) -> int:
     Walks message structure only (dicts and lists of dicts, bytes or arrays), never the
     elements of numeric arrays, so its cost does not grow with the points a message carries.
     """
-    if isinstance(value, bytes | bytearray):
+    if isinstance(value, _BYTES):
         return len(value)
     if isinstance(value, np.ndarray):
         return int(value.nbytes)
     if isinstance(value, dict):
-        return sum(payload_bytes(item) for item in value.values())
-    if isinstance(value, list) and value and isinstance(value[0], dict | bytes | np.ndarray):
+        total = 0
+        for item in value.values():
+            if isinstance(item, _CONTAINERS):
+                total += payload_bytes(item)
+        return total
+    if isinstance(value, list) and value and isinstance(value[0], _BULK_ITEMS):
         return sum(payload_bytes(item) for item in value)
     return 0
+
+
+# (tuples, not `a | b` unions: a union is built anew on every call)
+_BYTES = (bytes, bytearray)
+_CONTAINERS = (bytes, bytearray, np.ndarray, dict, list)
+_BULK_ITEMS = (dict, bytes, np.ndarray)

@@ -8,6 +8,7 @@ through tables instead of re-reading type strings for every value.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cached_property
 from types import MappingProxyType
 from typing import Any, Literal
 
@@ -67,6 +68,27 @@ class MessageSpec:
     def __post_init__(self) -> None:
         if not self.by_name and self.fields:
             object.__setattr__(self, "by_name", MappingProxyType({f.name: f for f in self.fields}))
+
+    @cached_property
+    def bulk_free(self) -> bool:
+        """No bytes and no numeric sequences at any depth: its canonical messages hold no
+        ndarray and no ``bytes``, so per-message walks for bulk data (payload size, float32
+        widening for JSON) can be skipped, which matters for the small messages that
+        dominate message rates (std_msgs, Imu, Twist)."""
+        return all(
+            f.category not in (BYTES, NUMERIC_SEQUENCE)
+            and (f.message is None or f.message.bulk_free)
+            for f in self.fields
+        )
+
+    @cached_property
+    def has_float32_sequence(self) -> bool:
+        """A ``float32[]`` at any depth (an ndarray that JSON must widen to float64)."""
+        return any(
+            (f.category == NUMERIC_SEQUENCE and f.base == "float32")
+            or (f.message is not None and f.message.has_float32_sequence)
+            for f in self.fields
+        )
 
 
 @dataclass(frozen=True)

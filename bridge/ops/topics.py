@@ -79,7 +79,11 @@ def handle_publish(ctx: Context, session: ClientSession, op: PublishFields) -> N
     checked = checked_message(ctx, ctx.state.registry.message(type_name), op)
     if isinstance(checked, InvalidMessage):
         raise OpFailure(f"message dropped: {checked.problem}")
-    if not session.ros1_seq_noted and has_ros1_header_seq(op.msg):
+    if (
+        not session.ros1_seq_noted
+        and "header" in checked.spec.by_name  # (valid: the message has no other fields)
+        and has_ros1_header_seq(op.msg)
+    ):
         session.ros1_seq_noted = True
         ctx.problem(session, "publish", op.id, ROS1_SEQ_NOTE, StatusLevel.WARNING)
     message = TopicMessage(

@@ -238,3 +238,55 @@ def test_action_parts_without_definition_text_are_a_schema_error(registry):
     with pytest.raises(UnknownTypeError, match="no definition text"):
         registry.full_text("test_msgs/action/Fibonacci_FeedbackMessage")
     assert "MSG: std_msgs/Header" in registry.full_text("sensor_msgs/msg/Imu")
+
+
+def _bulk_in(value: object) -> list[object]:
+    """Every ndarray and bytes value anywhere in a canonical message."""
+    if isinstance(value, np.ndarray | bytes):
+        return [value]
+    if isinstance(value, dict):
+        return [found for item in value.values() for found in _bulk_in(item)]
+    if isinstance(value, list):
+        return [found for item in value for found in _bulk_in(item)]
+    return []
+
+
+def test_bulk_free_types_hold_no_bytes_or_arrays_and_the_others_do() -> None:
+    """`bulk_free` lets the bridge skip walking small messages for bulk data: a type it
+    calls bulk-free must never hold any, at any depth (a default message has every fixed
+    nested message and an empty value for every sequence), and every type whose default
+    holds a float32 array must say it has one (JSON widens those)."""
+    from schemas.message import default_message
+
+    registry = TypeRegistry()
+    names = registry.message_names()
+    assert len(names) > 100
+    bulk_free = 0
+    for name in names:
+        spec = registry.message(name)
+        found = _bulk_in(default_message(spec))
+        if spec.bulk_free:
+            bulk_free += 1
+            assert found == [], name
+        else:
+            assert found or any(f.category == "message_array" for f in spec.fields), name
+        if any(isinstance(v, np.ndarray) and v.dtype == np.float32 for v in found):
+            assert spec.has_float32_sequence, name
+    assert 0 < bulk_free < len(names)
+
+
+@pytest.mark.parametrize(
+    ("name", "bulk_free", "float32"),
+    [
+        ("std_msgs/msg/String", True, False),
+        ("sensor_msgs/msg/Imu", True, False),  # nested messages, fixed float64[9] lists
+        ("geometry_msgs/msg/TwistStamped", True, False),
+        ("sensor_msgs/msg/PointCloud2", False, False),  # uint8[] data: bytes
+        ("sensor_msgs/msg/LaserScan", False, True),
+        ("sensor_msgs/msg/PointCloud", False, True),  # float32[] inside ChannelFloat32[]
+        ("std_msgs/msg/Float32MultiArray", False, True),
+    ],
+)
+def test_bulk_and_float32_flags_of_known_types(name: str, bulk_free: bool, float32: bool) -> None:
+    spec = TypeRegistry().message(name)
+    assert (spec.bulk_free, spec.has_float32_sequence) == (bulk_free, float32)
