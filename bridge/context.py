@@ -121,21 +121,25 @@ class Context:
 
     def release(self, session: ClientSession, subscription: Subscription, release: Release) -> None:
         """Turn a subscription's release into deliveries and a wake-up deadline."""
-        settings = subscription.settings
-        encoding = settings.compression
-        fragment_size = session.fragment_size_for(subscription)
         for message in release.messages:
-            self.effects.append(
-                Send(
-                    session.client_id,
-                    Delivery(message, subscription.spelling, encoding, settings.reduce),
-                    subscription.topic,
-                    fragment_size,
-                    settings.queue_length,
-                )
-            )
+            self.deliver(session, subscription, message)
         if release.wake_at_ns is not None:
             self.schedule(("release", session.client_id, subscription.topic), release.wake_at_ns)
+
+    def deliver(
+        self, session: ClientSession, subscription: Subscription, message: TopicMessage
+    ) -> None:
+        """Send one message of `subscription` to its client, as the subscription asked."""
+        settings = subscription.settings
+        self.effects.append(
+            Send(
+                session.client_id,
+                Delivery(message, subscription.spelling, settings.compression, settings.reduce),
+                subscription.topic,
+                session.fragment_size_for(subscription),
+                settings.queue_length,
+            )
+        )
 
     def publish(self, message: TopicMessage, origin_node: str) -> None:
         """Hand a message to every sink (local subscribers first)."""

@@ -263,11 +263,11 @@ class BridgeCore:
             )
             return
         op_name, op_id = message.get("op"), reply_id(message.get("id"))
-        shown_op = safe_text(str(op_name), 60) if op_name is not None else "?"
         if "fragment_size" in message:
-            set_fragment_size(ctx, session, message["fragment_size"], shown_op, op_id)
+            set_fragment_size(ctx, session, message["fragment_size"], shown(op_name), op_id)
         route = OP_ROUTES.get(op_name) if isinstance(op_name, str) else None
         if route is None:
+            shown_op = shown(op_name)
             what = "message without an op" if op_name is None else f"Unknown operation: {shown_op}"
             ctx.problem(session, shown_op, op_id, what)
             return
@@ -391,6 +391,11 @@ class BridgeCore:
             entry.latched = message
         ctx.publish(message, node)
         return ctx.effects
+
+
+def shown(op_name: JsonValue) -> str:
+    """An op's name as a log line may show it."""
+    return safe_text(str(op_name), 60) if op_name is not None else "?"
 
 
 def set_fragment_size(

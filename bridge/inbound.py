@@ -46,6 +46,7 @@ def read_frame(data: bytes | str, arrived_ns: int) -> InboundFrame:
 
 
 _JSON_STARTS = (b"{", b"[", b'"')
+_SCALARS = frozenset((str, int, float, bool, type(None)))
 _HEAD_KEYS = ("op", "service", "action")
 
 
@@ -58,9 +59,15 @@ def decode_frame(data: bytes | str) -> JsonValue | RefusedFrame:
     to values no encoder could write again (`schemas.safety.frame_problem`).
     """
     message, strict_json = _decode(data)
-    if strict_json and isinstance(message, dict) and isinstance(message.get("msg"), dict):
+    if strict_json and type(message) is dict and type(message.get("msg")) is dict:
         # orjson vouched for every value; a publish's message is walked by its type later,
-        # so only the rest (small, but possibly relayed untyped) needs the depth check.
+        # so only the rest (small, but possibly relayed untyped) needs the depth check, and
+        # not even that when it is all scalars (the usual op, topic, id).
+        for key, value in message.items():
+            if type(value) not in _SCALARS and key != "msg":
+                break
+        else:
+            return message
         problem = frame_problem({k: v for k, v in message.items() if k != "msg"})
     else:
         problem = frame_problem(message)

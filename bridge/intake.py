@@ -96,11 +96,12 @@ class Intake:
         except SchemaError as exc:
             self._apply(self._core.receive_invalid(self._client_id, str(exc), time.time_ns()))
             return
-        key = message_key(frame.message)
         work = self._core.offload(frame, arrived_ns)  # the check's 'now': the frame's arrival
         if work is not None:
-            self._start_worker(Entry(key, frame, ready=False), work)
-        elif self._waiting and self._must_wait(key, self._waiting):
+            self._start_worker(Entry(message_key(frame.message), frame, ready=False), work)
+        elif not self._waiting:  # (the usual case: nothing to keep an order with)
+            self._handle(frame)
+        elif self._must_wait(key := message_key(frame.message), self._waiting):
             self._wait(Entry(key, frame))
         else:
             self._handle(frame)

@@ -309,7 +309,10 @@ class ClientLink:
 
     def _render(self, send: Send) -> list[WireFrame] | None:
         """The frames of `send`, or None (logged) if it cannot be encoded."""
+        item = send.item
         try:
+            if send.fragment_size is None and type(item) is Delivery and item.reduce is None:
+                return [item.message.frame(item.encoding, item.topic)]  # the usual delivery
             frames = render(
                 send.item, send.fragment_size, self._fragment_id(send), self._link_rate()
             )

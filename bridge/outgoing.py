@@ -50,6 +50,11 @@ class WireFrame:
     reduction: Reduction | None = None
 
 
+# Messages smaller than this are encoded without taking their lock (see `TopicMessage.frame`).
+UNLOCKED_ENCODE_BYTES = 64 * 1024
+_MAKING_LOCKS = threading.Lock()
+
+
 class TopicMessage:
     """A canonical message published on `topic`, with per-encoding frames cached.
 
@@ -96,7 +101,7 @@ class TopicMessage:
         self.cdr_bytes = cdr_bytes
         self.size_hint = payload_bytes(msg) if size_hint is None else size_hint
         self._frames: dict[tuple[str, str] | tuple[str, str, float], WireFrame] = {}
-        self._lock = threading.RLock()  # png re-enters for the JSON frame
+        self._lock: threading.RLock | None = None  # made when first needed (`_locked`)
         self._reducer: CloudReducer | None = None
 
     def frame(self, encoding: str, topic: str) -> WireFrame:
@@ -105,25 +110,40 @@ class TopicMessage:
         cached = self._frames.get(key)
         if cached is not None:
             return cached
-        with self._lock:
+        if self.size_hint < UNLOCKED_ENCODE_BYTES:
+            # Cheaper than a lock: two threads racing here encode a small frame twice, and
+            # both get the first one stored.
+            return self._frames.setdefault(key, self._encode(encoding, topic))
+        with self._locked():
             cached = self._frames.get(key)
             if cached is None:
                 cached = self._encode(encoding, topic)
                 self._frames[key] = cached
         return cached
 
+    def _locked(self) -> threading.RLock:
+        """The message's lock (reentrant: png re-enters for the JSON frame), made on first use:
+        most small messages never need one."""
+        lock = self._lock
+        if lock is None:
+            with _MAKING_LOCKS:
+                if self._lock is None:
+                    self._lock = threading.RLock()
+                lock = self._lock
+        return lock
+
     def serialized(self) -> bytes:
         """The CDR bytes (with their 4-byte header), computed once and shared by cbor-raw and
         every other CDR speaker (thread-safe)."""
         if self.cdr is None:
-            with self._lock:
+            with self._locked():
                 if self.cdr is None:
                     self.cdr = to_cdr(self.registry, self.type_name, self.msg)
         return self.cdr
 
     def reducer(self) -> CloudReducer:
         """The message's point-cloud reductions, shared by its subscribers (thread-safe)."""
-        with self._lock:
+        with self._locked():
             if self._reducer is None:
                 self._reducer = CloudReducer(self.msg)
             return self._reducer
@@ -141,7 +161,7 @@ class TopicMessage:
             frame = WireFrame(publish_cbor(topic, msg, said), text=False, reduction=reduction)
         else:
             frame = WireFrame(publish_json(topic, msg, said), text=True, reduction=reduction)
-        with self._lock:
+        with self._locked():
             return self._frames.setdefault(key, frame)
 
     def _encode(self, encoding: str, topic: str) -> WireFrame:

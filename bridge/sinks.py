@@ -27,8 +27,15 @@ class LocalFanout:
     """Delivers messages to the websocket clients subscribed to their topic."""
 
     def accept(self, ctx: Context, message: TopicMessage, origin_node: str) -> None:
-        subscribers = ctx.state.topic_subscriptions.get(message.topic, {})
+        subscribers = ctx.state.topic_subscriptions.get(message.topic)
+        if not subscribers:
+            return
+        sessions, now_ns = ctx.state.sessions, ctx.now_ns
         for client_id, subscription in list(subscribers.items()):
-            session = ctx.state.sessions.get(client_id)
-            if session is not None:
-                ctx.release(session, subscription, subscription.offer(message, ctx.now_ns))
+            session = sessions.get(client_id)
+            if session is None:
+                continue
+            if subscription.passes(now_ns):
+                ctx.deliver(session, subscription, message)
+            else:
+                ctx.release(session, subscription, subscription.offer(message, now_ns))

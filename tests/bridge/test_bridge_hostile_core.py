@@ -204,3 +204,19 @@ def test_every_answer_to_hostile_frames_can_be_encoded(harness):
             harness.advance(0.3)
     assert_everything_sent_encodes(harness)
     assert {c.code for c in harness.closes} <= {1009}
+
+
+def test_a_publish_with_deep_nesting_beside_its_msg_is_refused(harness):
+    """A publish of only scalars beside `msg` skips the depth walk; anything else keeps it."""
+    pub = harness.connect()
+    harness.send(pub, {"op": "set_level", "level": "error"})
+    harness.send(pub, {"op": "advertise", "topic": "/d", "type": "std_msgs/String"})
+    deep = "[" * 300 + "]" * 300
+    harness.send(pub, f'{{"op":"publish","topic":"/d","msg":{{}},"extra":{deep}}}')
+    [status] = harness.outbox(pub)
+    assert "nesting deeper" in status["msg"]
+    sub = harness.connect()
+    harness.send(sub, {"op": "subscribe", "topic": "/d"})
+    harness.send(pub, '{"op":"publish","topic":"/d","msg":{"data":"ok"},"id":"p1","latch":false}')
+    assert [m["msg"] for m in harness.outbox(sub) if m["op"] == "publish"] == [{"data": "ok"}]
+    assert harness.outbox(pub) == []
