@@ -22,7 +22,7 @@ the subscriber decoded, on one wall clock. The clients are plain ``websockets`` 
 that behave like a careful third-party client: big JSON frames are encoded and decoded on a worker
 thread, in order, as riverbridge's own client library does, so the clients add as little as
 they can. Before the workloads each relay's idle RSS and CPU are printed; every workload also
-gives the relay's CPU seconds per 10,000 relayed messages (deliveries; a call counts two).
+gives the relay's CPU milliseconds per 10,000 relayed messages (deliveries; a call counts two).
 
 Usage: python -m benchmarks.relay [--only burst,sustained,scan,fanout,service]
        [--encodings json,cbor] [--repeat N [--interleave]] [--compare /work/main] [--uvloop]
@@ -365,7 +365,7 @@ def metrics(workload: str, result: dict[str, Any]) -> dict[str, float]:
         relayed += got["count"]
     for name, seconds in result["cpu_s"].items():
         out[f"CPU s {name}"] = seconds
-    out["relay CPU s / 10k msgs"] = 1e4 * result["cpu_s"]["bridge"] / max(1, relayed)
+    out["relay CPU ms / 10k msgs"] = 1e7 * result["cpu_s"]["bridge"] / max(1, relayed)
     return out
 
 
@@ -376,7 +376,7 @@ def median_table(targets: list[Target], runs: dict[str, list[dict[str, float]]])
     others = [label for label in labels if label != base]
     head = (
         f"  {'median of ' + str(len(runs[labels[0]])) + ' runs':<28}"
-        + "".join(f"{label:>12}" for label in labels)
+        + "".join(f"{label:>14}" for label in labels)
         + "".join(f"{label + '/' + base:>16}" for label in others)
     )
     lines = [head]
@@ -385,7 +385,7 @@ def median_table(targets: list[Target], runs: dict[str, list[dict[str, float]]])
         ratios = [medians[o] / medians[base] if medians[base] else float("nan") for o in others]
         lines.append(
             f"  {key:<28}"
-            + "".join(f"{medians[label]:>12,.1f}" for label in labels)
+            + "".join(f"{medians[label]:>14,.1f}" for label in labels)
             + "".join(f"{r:>16.2f}" for r in ratios)
         )
     return lines
