@@ -126,6 +126,13 @@ def test_fragmented_messages_go_to_websockets_whole_with_their_controls() -> Non
     assert scan(split_at(stream, 3, 20, 30)) == scan([stream])
 
 
+def test_a_data_frame_inside_a_fragmented_message_goes_to_websockets() -> None:
+    """A protocol error websockets must see (1002): the scanner does not deliver it."""
+    opening = client_frame(Opcode.BINARY, b"open", fin=False)
+    intruder = client_frame(Opcode.TEXT, b"not a continuation")
+    assert scan([opening + intruder]) == [(RAW, opening), (RAW, intruder)]
+
+
 def test_reserved_bits_and_invalid_opcodes_are_handed_on_whole() -> None:
     rsv = with_rsv1(client_frame(Opcode.TEXT, b"compressed?"))
     odd = bytes([0x83]) + client_frame(Opcode.TEXT, b"opcode 3")[1:]
