@@ -28,6 +28,7 @@ from websockets.utils import apply_mask as pure_apply_mask
 
 from bridge.compose import RunningBridge, run_bridge
 from bridge.config import BridgeConfig
+from bridge.reading import FrameConnection
 from schemas import codec_cbor
 
 pytestmark = pytest.mark.timeout(60)
@@ -201,20 +202,20 @@ class RawClient:
         bridge as a chunk of its own."""
         ours = self.writer.get_extra_info("socket")
         async with asyncio.timeout(10):
-            theirs = await self.bridge_socket()
+            theirs = (await self.bridge_connection()).transport.get_extra_info("socket")
             for piece in pieces:
                 self.writer.write(piece)
                 await self.writer.drain()
                 while unread_bytes(ours, termios.TIOCOUTQ) or unread_bytes(theirs, FIONREAD):
                     await asyncio.sleep(0.001)
 
-    async def bridge_socket(self) -> Any:
+    async def bridge_connection(self) -> FrameConnection:
         """The bridge's end of this connection, once its link is up."""
         name = self.writer.get_extra_info("sockname")
         while True:
             for link in self.bridge.server.links.values():
                 if link.ws.remote_address == name:
-                    return link.ws.transport.get_extra_info("socket")
+                    return link.ws
             await asyncio.sleep(0.001)
 
     async def next_event(self) -> Any:
@@ -269,6 +270,22 @@ async def test_a_ping_between_data_frames_is_answered_in_order() -> None:
             cut = len(text("before")) + 3  # inside the ping's mask
             await raw.send(stream[:cut], stream[cut:])
             assert await raw.next_frame(Opcode.PONG) == b"mid-stream"
+            assert [await next_data(sub), await next_data(sub)] == ["before", "after"]
+
+
+async def test_the_bridge_s_own_ping_is_acknowledged_by_a_pong_between_data_frames() -> None:
+    """websockets' keepalive waits for its ping's pong: a pong cut between two data frames
+    still reaches it."""
+    async with run_bridge(BridgeConfig(port=0)) as bridge:
+        sub = await subscriber(bridge.url)
+        async with RawClient(bridge) as raw:
+            pong_waiter = await (await raw.bridge_connection()).ping(b"keepalive")
+            assert await raw.next_frame(Opcode.PING) == b"keepalive"
+            stream = text("before") + masked(0xA, b"keepalive") + text("after")
+            cut = len(text("before")) + 4  # inside the pong's mask
+            await raw.send(stream[:cut], stream[cut:])
+            async with asyncio.timeout(10):
+                await pong_waiter
             assert [await next_data(sub), await next_data(sub)] == ["before", "after"]
 
 
