@@ -10,6 +10,12 @@ frame or message with 1009 and closes). What the Assembler did besides queueing 
 as it did it: fragments joined (at most `MAX_FRAGMENTS`, else 1009), text decoded as UTF-8
 (else 1007).
 
+Once the handshake is done, the plain data frames do not even go through websockets' parser:
+a `FrameScanner` (`frame_scan.py`) splits the bytes at frame boundaries, unmasks those frames
+itself and hands every other frame, whole, to websockets, which then only ever parses whole
+frames. It takes over only at a clean point (the request ended a chunk), and websockets alone
+reads the connection again once it is no longer open.
+
 The reader's turns and waits (the edge's fair turns, pacing by backed-up subscribers, holds)
 become pauses of the transport's reading: a reader that has worked `TURN_S` in one chunk, or
 that `must_wait`, keeps the chunk's remaining messages, pauses reading and goes on after one
@@ -30,6 +36,8 @@ from websockets.asyncio.messages import MAX_FRAGMENTS
 from websockets.asyncio.server import ServerConnection
 from websockets.frames import CloseCode, Frame, Opcode
 from websockets.protocol import Event, State
+
+from bridge.frame_scan import RAW, TEXT, FrameScanner
 
 logger = logging.getLogger("bridge.server")
 
@@ -156,6 +164,8 @@ class FrameConnection(ServerConnection):
         self._reader: Reader | None = None
         self._early: list[Message] = []  # messages parsed before a reader was attached
         self._failed = False
+        self._scanner: FrameScanner | None = None  # set once the handshake leaves a clean point
+        self._request_tail = b""  # the handshake's last bytes, to find where the request ends
 
     def attach(self, reader: Reader) -> None:
         """Give messages to `reader` from now on (and those that came before it)."""
@@ -178,7 +188,53 @@ class FrameConnection(ServerConnection):
     def data_received(self, data: bytes) -> None:
         if self._reader is not None:
             self._reader.start_turn()
+        scanner = self._scanner
+        if scanner is not None:
+            if self.protocol.state is State.OPEN:
+                self._scan(scanner, data)
+                return
+            # Closing, or bytes before the handshake's answer: websockets' alone from here on.
+            self._scanner = None
+            data = scanner.take_rest() + data
+        handshaking = self.request is None
         super().data_received(data)
+        if handshaking:
+            self._after_request_bytes(data)
+
+    def _after_request_bytes(self, data: bytes) -> None:
+        """Scan frames from now on if the request ended exactly at this chunk's end: then
+        websockets' parser waits at a frame boundary with nothing buffered."""
+        seen = self._request_tail + data
+        if self.request is None:
+            self._request_tail = seen[-3:]
+            return
+        end = seen.find(b"\r\n\r\n") + 4
+        if end == len(seen) >= 4 and not self.protocol.reader.buffer:
+            sizes = (self.protocol.max_message_size, self.protocol.max_fragment_size)
+            self._scanner = FrameScanner(min((s for s in sizes if s is not None), default=None))
+
+    def _scan(self, scanner: FrameScanner, data: bytes) -> None:
+        """Deliver the chunk's plain data frames, hand the other frames to websockets, in
+        order; once the connection is no longer open, the rest goes to websockets."""
+        scanner.feed(data)
+        while (frame := scanner.next_frame()) is not None:
+            kind, payload = frame
+            if kind is RAW:
+                super().data_received(payload)
+            else:
+                self._deliver(kind is TEXT, payload)
+            if self.protocol.state is not State.OPEN:
+                self._scanner = None
+                rest = scanner.take_rest()
+                if rest:
+                    super().data_received(rest)
+                return
+
+    def eof_received(self) -> None:
+        scanner, self._scanner = self._scanner, None
+        if scanner is not None and (rest := scanner.take_rest()):
+            super().data_received(rest)  # a partial frame: websockets fails it as before
+        super().eof_received()
 
     def process_event(self, event: Event) -> None:
         if self.request is None:  # the handshake request
