@@ -78,6 +78,18 @@ burst,sustained,service --repeat 3 --interleave --seconds 5`, load 1.2-3.2): sma
 relay 0.3); service round trip p50 0.7 ms (main 0.9, relay 0.5), p95 1.0 ms (main 1.4, relay
 0.8), 0.85x the relay's calls/s (main 0.62x).
 
+Third sitting of issue 21 (`--floor --compare <188626b> --repeat 3 --interleave --seconds 5`,
+every workload, load 0.9-2.0; this bridge / 188626b, as ratios to the bare relay of the same
+run): with the bulk-free shortcuts, the link's own frame headers and the frame scanner
+(`bridge.frame_scan`), small messages burst JSON 0.53x / 0.58x (an earlier sitting 0.66x /
+0.49x: a 15,000-message burst lasts under a second and moves with the load), burst CBOR 0.85x /
+0.56x, sustained JSON 0.91x / 0.56x (23,456 msg/s), sustained CBOR 0.62x / 0.39x, all lossless;
+the bridge's CPU per 10,000 relayed 395-483 ms against 500-839 ms (the relay 253-347 ms).
+One-connection scan + IMU: JSON scan p50 1.05x / 1.07x, CBOR 1.26x / 1.26x, CBOR IMU p99
+4.8 / 6.4 ms. Fan-out to 16: every scan delivered, scan p50 1.12x / 1.19x, IMU p99 0.34x /
+0.33x, CPU 1.16x / 1.47x the relay's. Service round trip p50 0.8 / 1.0 ms (relay 0.5), p95
+1.2 / 1.4 ms, 0.63x / 0.55x the relay's calls/s. Idle 62 MiB, 0.5 % CPU.
+
 End of that session, quiet, before and after the whole of it (`nice -n -15 python -m
 benchmarks.relay --floor --compare <checkout of bf1f834> --repeat 3 --interleave --seconds 5`,
 load 0.8-1.9; ratios to the bare relay of the same run, after / before): burst JSON 0.42 / 0.46,
