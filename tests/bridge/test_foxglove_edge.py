@@ -143,7 +143,10 @@ async def test_a_foxglove_client_that_stops_reading_loses_its_oldest(tmp_path: P
         channel = await wait_for_channel(stalled, "/bulk")
         request = {"op": "subscribe", "subscriptions": [{"id": 1, "channelId": channel}]}
         await stalled.send(orjson.dumps(request).decode())
-        await asyncio.sleep(0.2)  # (subscriptions are in place once both ops were handled)
+        subscribed = bridge.core.state.topic_subscriptions
+        async with asyncio.timeout(10):  # both subscriptions in place
+            while len(subscribed.get("/bulk", {})) < 2:
+                await asyncio.sleep(0.01)
         count = 300
         received = 0
 
