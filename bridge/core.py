@@ -385,7 +385,13 @@ class BridgeCore:
         self.state.graph.declare_type(name, spec.name)
         entry = self.state.graph.add_publisher(name, node, None, latch=latch)
         message = TopicMessage(
-            name, spec.name, normalize(spec, msg, now_ns=now_ns), now_ns, self.state.registry, cdr
+            name,
+            spec.name,
+            normalize(spec, msg, now_ns=now_ns),
+            now_ns,
+            self.state.registry,
+            cdr,
+            has_float32=spec.has_float32_sequence,
         )
         if latch:
             entry.latched = message

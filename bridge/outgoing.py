@@ -63,11 +63,13 @@ class TopicMessage:
     holds the serialized form (then cbor-raw needs no encode). `size_hint` (how costly an
     encode will be) and `cdr_bytes` (the serialized size, for tracing) may come precomputed
     from a worker thread; otherwise the first is derived here and the second left to whoever
-    needs it.
+    needs it. `has_float32` (whether JSON must widen float32 arrays) comes from the caller that
+    holds the type's spec; otherwise it is looked up when JSON is first encoded.
     """
 
     __slots__ = (
         "_frames",
+        "_has_float32",
         "_lock",
         "_reducer",
         "cdr",
@@ -91,6 +93,7 @@ class TopicMessage:
         *,
         size_hint: int | None = None,
         cdr_bytes: int | None = None,
+        has_float32: bool | None = None,
     ) -> None:
         self.topic = topic
         self.type_name = type_name
@@ -103,6 +106,7 @@ class TopicMessage:
         self._frames: dict[tuple[str, str] | tuple[str, str, float], WireFrame] = {}
         self._lock: threading.RLock | None = None  # made when first needed (`_locked`)
         self._reducer: CloudReducer | None = None
+        self._has_float32 = has_float32
 
     def frame(self, encoding: str, topic: str) -> WireFrame:
         """The `publish` frame for `encoding` naming the topic as `topic` (thread-safe)."""
@@ -171,14 +175,16 @@ class TopicMessage:
             return WireFrame(publish_cbor_raw(topic, self.serialized(), self.stamp_ns), text=False)
         if encoding == PNG:
             return WireFrame(encode_png_op(self.frame(JSON, topic).data), text=True)
-        return WireFrame(publish_json(topic, self.msg, widen=self._has_float32()), text=True)
+        return WireFrame(publish_json(topic, self.msg, widen=self._widens()), text=True)
 
-    def _has_float32(self) -> bool:
+    def _widens(self) -> bool:
         """Whether the message may hold float32 arrays, which JSON must widen (its type says)."""
-        try:
-            return self.registry.message(self.type_name).has_float32_sequence
-        except SchemaError:
-            return True
+        if self._has_float32 is None:
+            try:
+                self._has_float32 = self.registry.message(self.type_name).has_float32_sequence
+            except SchemaError:
+                self._has_float32 = True
+        return self._has_float32
 
 
 # Not frozen, like `bridge.effects.Send`: one per message and subscriber; treat as immutable.

@@ -358,8 +358,8 @@ ROS1_HEADER_SEQ = "seq"
 
 def has_ros1_header_seq(raw: JsonValue) -> bool:
     """Whether a published message's top-level `header` carries ROS 1's `seq`."""
-    header = raw.get("header") if type(raw) is dict or isinstance(raw, Mapping) else None
-    return (type(header) is dict or isinstance(header, Mapping)) and ROS1_HEADER_SEQ in header
+    header = raw.get("header") if isinstance(raw, Mapping) else None
+    return isinstance(header, Mapping) and ROS1_HEADER_SEQ in header
 
 
 def normalize(spec: MessageSpec, raw: JsonValue, *, now_ns: int) -> Message:

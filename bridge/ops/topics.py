@@ -94,6 +94,7 @@ def handle_publish(ctx: Context, session: ClientSession, op: PublishFields) -> N
         ctx.state.registry,
         size_hint=checked.size_hint,
         cdr_bytes=checked.cdr_bytes,
+        has_float32=checked.spec.has_float32_sequence,
     )
     if session.node in entry.latching:
         entry.latched = message
