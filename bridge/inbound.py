@@ -76,7 +76,10 @@ def decode_frame(data: bytes | str) -> JsonValue | RefusedFrame:
 
 def _decode(data: bytes | str) -> tuple[JsonValue, bool]:
     """The decoded frame, and whether orjson's strict JSON parser read it."""
-    if isinstance(data, str) or bytes(data[:64]).lstrip()[:1] in _JSON_STARTS:
+    # (A byte of 0x80 or above, as every CBOR map's first byte is, starts no JSON document.)
+    if isinstance(data, str) or (
+        data and data[0] < 0x80 and bytes(data[:64]).lstrip()[:1] in _JSON_STARTS
+    ):
         return codec_json.loads_strictness(data)
     try:
         return codec_cbor.loads(data), False

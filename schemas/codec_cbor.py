@@ -9,6 +9,7 @@ floats float64, lists arrays. In: every typed-array tag becomes a zero-copy ndar
 from __future__ import annotations
 
 import io
+import secrets
 from collections.abc import Mapping
 from types import MappingProxyType
 from typing import Any
@@ -107,6 +108,19 @@ def _tag_hook(*args: Any) -> Any:
 
 def loads(data: bytes | bytearray | memoryview) -> Any:
     """Parse one CBOR item; typed-array tags become ndarrays. Raises :class:`DecodeError`."""
+    if len(data) < _WRAP_LIMIT:
+        # cbor2.loads ignores bytes after the first item, and a decoder on a stream (which can
+        # tell where the item ended) costs twice as much to set up as the item takes to read.
+        # So a small frame is read as the array [item, sentinel]: the second element is the
+        # sentinel only if nothing came between. Anything else (an error too) is read again
+        # below, which names the problem exactly.
+        try:
+            first, last = cbor2.loads(_PAIR + data + _SENTINEL_ITEM, tag_hook=_tag_hook)
+        except Exception:  # read again below, for the exact error
+            pass
+        else:
+            if type(last) is bytes and last == _SENTINEL:
+                return first
     stream = io.BytesIO(data)
     try:
         obj = cbor2.CBORDecoder(stream, tag_hook=_tag_hook).decode()
@@ -118,3 +132,12 @@ def loads(data: bytes | bytearray | memoryview) -> Any:
     if stream.tell() != len(stream.getbuffer()):
         raise DecodeError("invalid CBOR: trailing bytes after the first item")
     return obj
+
+
+# Frames below this are read by the sentinel pair (which copies them once); larger ones, where
+# setting up a decoder is nothing beside the copy, by the stream decoder.
+_WRAP_LIMIT = 64 * 1024
+_PAIR = b"\x82"  # an array of two items
+# Random per process, so no client can end a frame with it by chance or on purpose.
+_SENTINEL = secrets.token_bytes(8)
+_SENTINEL_ITEM = cbor2.dumps(_SENTINEL)

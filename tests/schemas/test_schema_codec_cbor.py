@@ -1,4 +1,6 @@
+import io
 import math
+import random
 import struct
 
 import cbor2
@@ -102,3 +104,67 @@ def _equal(a, b) -> bool:
     if isinstance(a, np.ndarray):
         return a.dtype == b.dtype and np.array_equal(a, b)
     return a == b and type(a) is type(b)
+
+
+def _stream_loads(data):
+    """The reference reading: cbor2's stream decoder, which knows where the item ended."""
+    stream = io.BytesIO(data)
+    obj = cbor2.CBORDecoder(stream, tag_hook=codec_cbor._tag_hook).decode()
+    if stream.tell() != len(data):
+        raise ValueError("trailing bytes")
+    return obj
+
+
+PUBLISH = cbor2.dumps({"op": "publish", "topic": "/chatter", "msg": {"data": "hello world"}})
+
+
+@pytest.mark.parametrize(
+    "tail",
+    [b"\x01", b"\xff", b"\xf7", PUBLISH, cbor2.dumps(b"12345678"), b"\x48" + b"\x00" * 8],
+    ids=["int", "break", "undefined", "second frame", "byte string", "raw byte string"],
+)
+@pytest.mark.parametrize("padding", [0, 70_000], ids=["small", "large"])
+def test_bytes_after_the_first_item_are_refused(tail, padding):
+    frame = cbor2.dumps({"op": "publish", "topic": "/t", "msg": {"data": "x" * padding}})
+    with pytest.raises(DecodeError, match="trailing bytes after the first item"):
+        codec_cbor.loads(frame + tail)
+
+
+def test_small_frames_read_as_the_stream_decoder_reads_them():
+    """Valid frames, cut short, lengthened and with bytes flipped: each reads to the same
+    value, or is refused, exactly when cbor2's stream decoder says so."""
+    rng = random.Random(21)
+    frames = [
+        PUBLISH,
+        codec_cbor.dumps({"a": np.arange(5, dtype=np.float32), "b": [1, 2.5, None, True]}),
+        cbor2.dumps([[[[[[[[[[1]]]]]]]]]]),
+        cbor2.dumps({"x": cbor2.CBORTag(64, b"\x01\x02")}),
+    ]
+    for frame in frames:
+        variants = [frame[:cut] for cut in range(len(frame))]
+        variants += [frame + bytes([b]) for b in range(256)]
+        for _ in range(300):
+            flipped = bytearray(frame)
+            flipped[rng.randrange(len(frame))] = rng.randrange(256)
+            variants.append(bytes(flipped))
+        for data in variants:
+            try:
+                expected = _stream_loads(data)
+            except Exception:  # any refusal
+                with pytest.raises(DecodeError):
+                    codec_cbor.loads(data)
+                continue
+            got = codec_cbor.loads(data)
+            assert repr(got) == repr(expected), data
+
+
+def test_the_deepest_allowed_frame_still_reads():
+    """One level short of cbor2's depth limit: the small-frame path wraps the item in an array
+    (one level more), so it must fall back to the stream decoder rather than refuse it."""
+    depth = cbor2.CBORDecoder(io.BytesIO(b"")).max_depth
+    frame = b"\x81" * (depth - 1) + b"\x01"
+    assert _stream_loads(frame) is not None
+    value = codec_cbor.loads(frame)
+    for _ in range(depth - 1):
+        value = value[0]
+    assert value == 1

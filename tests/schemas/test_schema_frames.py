@@ -1,5 +1,6 @@
 import cbor2
 import numpy as np
+import pytest
 
 from schemas import codec_cbor, codec_json, frames, ops
 from schemas.ops import parse_op, to_wire
@@ -16,6 +17,18 @@ def test_publish_cbor_carries_typed_arrays():
     assert list(raw) == ["op", "topic", "msg"]
     assert raw["msg"]["ranges"].tag == 85
     assert codec_cbor.loads(frame)["msg"]["ranges"].tolist() == [1.0, 2.0]
+
+
+@pytest.mark.parametrize("topic", ["/t", "chatter", "/" + "long_name/" * 30, "/ünïcødé/话题"])
+def test_publish_cbor_is_the_whole_map_encoded_at_once(topic):
+    """The cached ``op``/``topic`` head plus the message equals encoding the map in one go,
+    for topic names whose length takes one, two or three bytes to write."""
+    msg = {"data": "x" * 300, "values": np.arange(3, dtype=np.int32), "n": [1, 2]}
+    whole = codec_cbor.dumps({"op": "publish", "topic": topic, "msg": msg})
+    assert frames.publish_cbor(topic, msg) == whole
+    assert frames.publish_cbor(topic, {}) == codec_cbor.dumps(
+        {"op": "publish", "topic": topic, "msg": {}}
+    )
 
 
 def test_publish_cbor_raw_envelope():
