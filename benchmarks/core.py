@@ -18,7 +18,7 @@ and `WireFrame` no longer frozen and `fragment_size_for` without lists, 1 subscr
 With `--roles` the bridge has a roles file (`bridge.roles`): the same frames, each checked by
 the policy (allow-list, token buckets, per-principal counters) before it takes effect.
 
-Usage: python -m benchmarks.core [--frames 50000] [--repeat 5] [--roles]
+Usage: python -m benchmarks.core [--frames 50000] [--repeat 5] [--roles] [--messages string,imu]
 """
 
 from __future__ import annotations
@@ -33,7 +33,24 @@ from schemas import codec_cbor, codec_json
 from schemas.registry import TypeRegistry
 from schemas.roles_config import RolesConfig
 
-TOPIC, TYPE = "/chatter", "std_msgs/msg/String"
+TOPIC = "/chatter"
+#: The messages to publish: a ~100-byte String, and a full Imu (a header and 45 numbers, the
+#: 50-200 Hz message whose check the compiled check takes over: `schemas.compiled_check`).
+MESSAGES: dict[str, tuple[str, dict[str, object]]] = {
+    "string": ("std_msgs/msg/String", {"data": "x" * 100}),
+    "imu": (
+        "sensor_msgs/msg/Imu",
+        {
+            "header": {"stamp": {"sec": 1_700_000_000, "nanosec": 5}, "frame_id": "imu_link"},
+            "orientation": {"x": 0.01, "y": 0.02, "z": 0.7, "w": 0.71},
+            "orientation_covariance": [0.01, 0, 0, 0, 0.01, 0, 0, 0, 0.01],
+            "angular_velocity": {"x": 0.001, "y": -0.002, "z": 0.05},
+            "angular_velocity_covariance": [0.001, 0, 0, 0, 0.001, 0, 0, 0, 0.001],
+            "linear_acceleration": {"x": 0.1, "y": 0.05, "z": 9.81},
+            "linear_acceleration_covariance": [0.1, 0, 0, 0, 0.1, 0, 0, 0, 0.1],
+        },
+    ),
+}
 
 
 def roles_config() -> BridgeConfig:
@@ -55,7 +72,12 @@ def roles_config() -> BridgeConfig:
 
 
 def per_frame_us(
-    encoding: str, subscribers: int, frames: int, repeat: int, roles: bool = False
+    encoding: str,
+    subscribers: int,
+    frames: int,
+    repeat: int,
+    roles: bool = False,
+    message: str = "string",
 ) -> float:
     """Median over `repeat` batches of the mean core time per publish frame, in µs."""
     core = BridgeCore(roles_config() if roles else BridgeConfig(), TypeRegistry())
@@ -65,11 +87,12 @@ def per_frame_us(
         now = time.time_ns()
         core.receive(client, encode(op), now, now)
 
+    type_name, msg = MESSAGES[message]
     for _ in range(subscribers):
-        receive(core.connect("sub"), {"op": "subscribe", "topic": TOPIC, "type": TYPE})
+        receive(core.connect("sub"), {"op": "subscribe", "topic": TOPIC, "type": type_name})
     publisher = core.connect("pub")
-    receive(publisher, {"op": "advertise", "topic": TOPIC, "type": TYPE})
-    frame = encode({"op": "publish", "topic": TOPIC, "msg": {"data": "x" * 100}})
+    receive(publisher, {"op": "advertise", "topic": TOPIC, "type": type_name})
+    frame = encode({"op": "publish", "topic": TOPIC, "msg": msg})
     batches = []
     for batch in range(repeat + 1):
         start = time.perf_counter_ns()
@@ -88,12 +111,25 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--roles", action="store_true", help="with a roles file: the policy checks every frame"
     )
+    parser.add_argument(
+        "--messages",
+        default="string",
+        help=f"comma-separated, of {', '.join(MESSAGES)} (default: string)",
+    )
     args = parser.parse_args(argv)
-    print(f"{'encoding':8s} {'subscribers':>11s} {'µs/frame':>9s} {'frames/s':>10s}")
-    for encoding in ("json", "cbor"):
-        for subscribers in (1, 10):
-            us = per_frame_us(encoding, subscribers, args.frames, args.repeat, args.roles)
-            print(f"{encoding:8s} {subscribers:11d} {us:9.2f} {1e6 / us:10,.0f}")
+    messages = [name.strip() for name in args.messages.split(",") if name.strip()]
+    unknown = [name for name in messages if name not in MESSAGES]
+    if unknown or not messages:
+        choices = ", ".join(MESSAGES)
+        parser.error(f"--messages: unknown {unknown or messages}; choose from {choices}")
+    print(f"{'message':8s} {'encoding':8s} {'subscribers':>11s} {'µs/frame':>9s} {'frames/s':>10s}")
+    for message in messages:
+        for encoding in ("json", "cbor"):
+            for subscribers in (1, 10):
+                us = per_frame_us(
+                    encoding, subscribers, args.frames, args.repeat, args.roles, message
+                )
+                print(f"{message:8s} {encoding:8s} {subscribers:11d} {us:9.2f} {1e6 / us:10,.0f}")
     return 0
 
 

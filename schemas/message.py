@@ -373,6 +373,9 @@ def normalize(spec: MessageSpec, raw: JsonValue, *, now_ns: int) -> Message:
     """
     if raw is None:
         return default_message(spec)
+    check = spec.compiled_check
+    if check is not None and (message := check(raw)) is not None:
+        return message
     try:
         return _message(spec, raw, now_ns)
     except _FieldError as exc:

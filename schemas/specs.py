@@ -10,9 +10,12 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from functools import cached_property
 from types import MappingProxyType
-from typing import Any, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from schemas.compiled_check import Check
 
 ArrayKind = Literal[None, "fixed", "bounded", "sequence"]
 
@@ -80,6 +83,14 @@ class MessageSpec:
             and (f.message is None or f.message.bulk_free)
             for f in self.fields
         )
+
+    @cached_property
+    def compiled_check(self) -> Check | None:
+        """The compiled shortcut of `schemas.message.normalize` for this type, or None
+        (`schemas.compiled_check`), built on first use."""
+        from schemas.compiled_check import compile_check  # (it imports this module)
+
+        return compile_check(self)
 
     @cached_property
     def has_float32_sequence(self) -> bool:

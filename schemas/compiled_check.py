@@ -1,0 +1,172 @@
+"""A compiled fast path for `schemas.message.normalize`: msgspec checks a message against a
+Struct built from its ROS type, in C.
+
+`normalize` walks a message field by field in Python: ~13 µs for a ``sensor_msgs/Imu``,
+which is a third of what the bridge spends relaying one. msgspec's ``convert`` checks the
+same dict against a Struct type in ~1.5 µs, and ``to_builtins`` gives it back as a dict in
+another ~1.5 µs (issue 21; ``benchmarks/validators.py``).
+
+It is only ever a shortcut, never a second definition of the rules: a Struct accepts a
+subset of what `normalize` accepts and gives the same canonical message for it. Whatever it
+refuses (an error, or one of the forms only `normalize` knows: ``null`` for NaN, ``"now"``
+and ``secs``/``nsecs`` times, a ``Header`` without a stamp, ROS 1's ``header.seq``, bools or
+numpy values among numbers, uint64 values past int64) goes to `normalize`'s own walk, which
+accepts it or names the problem exactly as before. Types whose canonical form needs more
+than checking are not compiled at all (`compile_check` gives None): bytes and numeric
+sequences (canonical as ``bytes`` and ndarrays), and ``float32`` fields (rounded to float32
+by `normalize`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from types import GenericAlias
+from typing import Annotated, Any
+
+import msgspec
+
+from schemas import primitives, specs
+from schemas.specs import FieldSpec, MessageSpec
+from schemas.values import Message
+
+#: A compiled check: the canonical message, or None when `normalize` must decide.
+Check = Callable[[Any], Message | None]
+
+# msgspec bounds an integer within int64; larger uint64 values fall back to `normalize`.
+_INT64_MAX = 2**63 - 1
+
+
+class _NotCompiled(Exception):
+    """The type needs `normalize`'s walk (see the module docstring)."""
+
+
+def compile_check(spec: MessageSpec) -> Check | None:
+    """The compiled check of `spec`, or None if its messages need `normalize`'s walk."""
+    try:
+        struct = _struct(spec, {})
+    except _NotCompiled:
+        return None
+    convert, to_builtins = msgspec.convert, msgspec.to_builtins
+
+    def check(raw: Any) -> Message | None:
+        try:
+            message: Message = to_builtins(convert(raw, struct))
+        except Exception:  # refused, or not a form msgspec reads: `normalize` decides
+            return None
+        return message
+
+    return check
+
+
+def _struct(spec: MessageSpec, made: dict[str, Any]) -> Any:
+    """The Struct type of `spec` (nested types built once per compile, in `made`)."""
+    if spec.name in made:
+        return made[spec.name]
+    if spec.name in primitives.TIME_TYPES:
+        sec = _int_type("int32")
+        nanosec = _int_type("uint32")
+        fields: list[tuple[str, Any, Any]] = [
+            ("sec", sec, msgspec.field(default=0, name="sec")),
+            ("nanosec", nanosec, msgspec.field(default=0, name="nanosec")),
+        ]
+    else:
+        fields = [
+            (f"f{index}", _field_type(field, made), _field_default(spec, field, made))
+            for index, field in enumerate(spec.fields)
+        ]
+    struct = msgspec.defstruct(
+        "ROS_" + spec.name.replace("/", "_"),
+        fields,
+        kw_only=True,
+        forbid_unknown_fields=True,
+    )
+    made[spec.name] = struct
+    return struct
+
+
+def _field_type(field: FieldSpec, made: dict[str, Any]) -> Any:
+    category = field.category
+    if category == specs.BOOL:
+        return bool
+    if category == specs.STRING:
+        return _string_type(field)
+    if category == specs.INT:
+        return _int_type(field.base)
+    if category == specs.FLOAT:
+        return _float_type(field.base)
+    if category == specs.MESSAGE:
+        return _struct(_message_spec(field), made)
+    if category == specs.NUMERIC_FIXED:
+        element = _float_type(field.base) if field.base in primitives.FLOAT_DTYPES else None
+        return _sized(_list_of(element or _int_type(field.base)), field)
+    if category == specs.BOOL_ARRAY:
+        return _sized(list[bool], field)
+    if category == specs.STRING_ARRAY:
+        return _sized(_list_of(_string_type(field)), field)
+    if category == specs.MESSAGE_ARRAY:
+        return _sized(_list_of(_struct(_message_spec(field), made)), field)
+    raise _NotCompiled(category)  # bytes, numeric sequences: canonical as bytes and ndarrays
+
+
+def _field_default(spec: MessageSpec, field: FieldSpec, made: dict[str, Any]) -> Any:
+    """The default of a missing field: `normalize`'s `_fresh_default`, built fresh each time."""
+    name = field.name
+    if spec.name == primitives.HEADER_TYPE and name == "stamp":
+        return msgspec.field(name=name)  # required: a Header without one is stamped `now`
+    if field.category == specs.MESSAGE:
+        factory = _default_factory(_message_spec(field), made)
+        return msgspec.field(default_factory=factory, name=name)
+    if field.category == specs.MESSAGE_ARRAY:
+        element = _default_factory(_message_spec(field), made)
+        count = field.length if field.array == "fixed" else 0
+        return msgspec.field(default_factory=lambda: [element() for _ in range(count)], name=name)
+    default = field.default
+    if isinstance(default, list):
+        return msgspec.field(default_factory=lambda: list(default), name=name)
+    return msgspec.field(default=default, name=name)
+
+
+def _default_factory(spec: MessageSpec, made: dict[str, Any]) -> Callable[[], Any]:
+    """A factory of `spec`'s all-defaults Struct (a Header's zero stamp given explicitly)."""
+    struct = _struct(spec, made)
+    if spec.name != primitives.HEADER_TYPE:
+        return struct  # type: ignore[no-any-return]
+    index = [field.name for field in spec.fields].index("stamp")
+    stamp = _struct(_message_spec(spec.fields[index]), made)
+    return lambda: struct(**{f"f{index}": stamp()})
+
+
+def _message_spec(field: FieldSpec) -> MessageSpec:
+    if field.message is None:
+        raise _NotCompiled(field.name)
+    return field.message
+
+
+def _int_type(base: str) -> Any:
+    low, high = primitives.INT_RANGES[base]
+    return Annotated[int, msgspec.Meta(ge=low, le=min(high, _INT64_MAX))]
+
+
+def _float_type(base: str) -> Any:
+    if base != "float64":
+        raise _NotCompiled(base)  # float32: `normalize` rounds it to float32
+    return float
+
+
+def _string_type(field: FieldSpec) -> Any:
+    if field.string_bound:
+        return Annotated[str, msgspec.Meta(max_length=field.string_bound)]
+    return str
+
+
+def _list_of(element: Any) -> Any:
+    """``list[element]`` for an element type made at run time."""
+    return GenericAlias(list, (element,))
+
+
+def _sized(kind: Any, field: FieldSpec) -> Any:
+    if field.array == "fixed":
+        return Annotated[kind, msgspec.Meta(min_length=field.length, max_length=field.length)]
+    if field.array == "bounded":
+        return Annotated[kind, msgspec.Meta(max_length=field.length)]
+    return kind
