@@ -11,10 +11,10 @@ subset of what `normalize` accepts and gives the same canonical message for it. 
 refuses (an error, or one of the forms only `normalize` knows: ``null`` for NaN, ``"now"``
 and ``secs``/``nsecs`` times, a ``Header`` without a stamp, ROS 1's ``header.seq``, bools or
 numpy values among numbers, uint64 values past int64) goes to `normalize`'s own walk, which
-accepts it or names the problem exactly as before. Types whose canonical form needs more
-than checking are not compiled at all (`compile_check` gives None): bytes and numeric
-sequences (canonical as ``bytes`` and ndarrays), and ``float32`` fields (rounded to float32
-by `normalize`).
+accepts it or names the problem exactly as before. ``float32`` values are range-checked by
+the Struct and rounded to float32 afterwards, as `normalize` does. Types with bytes or
+numeric sequences (canonical as ``bytes`` and ndarrays) are not compiled at all
+(`compile_check` gives None).
 """
 
 from __future__ import annotations
@@ -24,6 +24,7 @@ from types import GenericAlias
 from typing import Annotated, Any
 
 import msgspec
+import numpy as np
 
 from schemas import primitives, specs
 from schemas.specs import FieldSpec, MessageSpec
@@ -34,6 +35,8 @@ Check = Callable[[Any], Message | None]
 
 # msgspec bounds an integer within int64; larger uint64 values fall back to `normalize`.
 _INT64_MAX = 2**63 - 1
+# Numbers whose float64 value is exact if they came as ints.
+_EXACT_FLOAT = Annotated[float, msgspec.Meta(ge=-(2**53), le=2**53)]
 
 
 class _NotCompiled(Exception):
@@ -47,15 +50,52 @@ def compile_check(spec: MessageSpec) -> Check | None:
     except _NotCompiled:
         return None
     convert, to_builtins = msgspec.convert, msgspec.to_builtins
+    narrow = _float32_narrower(spec)
 
     def check(raw: Any) -> Message | None:
         try:
             message: Message = to_builtins(convert(raw, struct))
         except Exception:  # refused, or not a form msgspec reads: `normalize` decides
             return None
+        if narrow is not None:
+            narrow(message)
         return message
 
     return check
+
+
+Narrow = Callable[[dict[str, Any]], None]
+
+
+def _float32_narrower(spec: MessageSpec) -> Narrow | None:
+    """What rounds a checked message's float32 values to float32, in place, as `normalize`
+    does (msgspec checks their range, not their precision); None if it has none."""
+    steps: list[tuple[str, str, Narrow | None]] = []
+    for field in spec.fields:
+        if field.base == "float32" and field.category in (specs.FLOAT, specs.NUMERIC_FIXED):
+            steps.append((field.name, field.category, None))
+        elif field.category in (specs.MESSAGE, specs.MESSAGE_ARRAY) and field.message:
+            inner = _float32_narrower(field.message)
+            if inner is not None:
+                steps.append((field.name, field.category, inner))
+    if not steps:
+        return None
+
+    def narrow(message: dict[str, Any]) -> None:
+        for name, category, inner in steps:
+            if inner is None:
+                value = message[name]
+                if category == specs.FLOAT:
+                    message[name] = float(np.float32(value))
+                else:  # a fixed array: element-wise, as `normalize` casts it (no range check)
+                    message[name] = np.asarray(value).astype(np.float32).tolist()
+            elif category == specs.MESSAGE:
+                inner(message[name])
+            else:
+                for item in message[name]:
+                    inner(item)
+
+    return narrow
 
 
 def _struct(spec: MessageSpec, made: dict[str, Any]) -> Any:
@@ -97,7 +137,11 @@ def _field_type(field: FieldSpec, made: dict[str, Any]) -> Any:
     if category == specs.MESSAGE:
         return _struct(_message_spec(field), made)
     if category == specs.NUMERIC_FIXED:
-        element = _float_type(field.base) if field.base in primitives.FLOAT_DTYPES else None
+        element = None
+        if field.base == "float32":  # (cast by `normalize`, no range check; past 2**53 an
+            element = _EXACT_FLOAT  # int would be rounded twice here: left to the walk)
+        elif field.base == "float64":
+            element = float
         return _sized(_list_of(element or _int_type(field.base)), field)
     if category == specs.BOOL_ARRAY:
         return _sized(list[bool], field)
@@ -148,8 +192,9 @@ def _int_type(base: str) -> Any:
 
 
 def _float_type(base: str) -> Any:
-    if base != "float64":
-        raise _NotCompiled(base)  # float32: `normalize` rounds it to float32
+    if base == "float32":  # range-checked here, rounded by `_float32_narrower`
+        limit = primitives.FLOAT32_MAX
+        return Annotated[float, msgspec.Meta(ge=-limit, le=limit)]
     return float
 
 

@@ -109,14 +109,27 @@ class Maker:
         return self.rng.choice([low, high, 0, 1, self.rng.randint(low, high)])
 
     def floating(self) -> Any:
-        return self.rng.choice([0.0, -1.5, 1e300, 3, 2**60 + 1, self.rng.uniform(-1e6, 1e6)])
+        return self.rng.choice(
+            [
+                0.0,
+                -1.5,
+                0.1,
+                1e300,
+                3.4028235e38,
+                3,
+                2**60 + 1,
+                2**53 + 1,
+                self.rng.uniform(-1e6, 1e6),
+            ]
+        )
 
     def string(self, field: FieldSpec) -> str:
         bound = field.string_bound or 12
         return "".join(self.rng.choice('aé话 \n"') for _ in range(self.rng.randrange(bound + 1)))
 
 
-BROKEN = [None, True, 1, 1.5, "x", [], {}, [1.5], {"x": 1}, 2**64, -(2**63) - 1, 2**63]
+BROKEN = [None, True, 1, 1.5, "x", [], {}, [1.5], {"x": 1}, -1, 300, 70_000, 2**32, 2**63, 2**64]
+BROKEN += [-(2**63) - 1]
 
 
 def _break(rng: random.Random, raw: Any) -> Any:
@@ -149,20 +162,63 @@ def test_most_types_compile_and_the_ones_normalize_reshapes_do_not():
     uncompiled = (
         "sensor_msgs/msg/PointCloud2",
         "sensor_msgs/msg/LaserScan",
-        "std_msgs/msg/Float32",
+        "sensor_msgs/msg/Image",
     )
     for name in uncompiled:
-        assert REGISTRY.message(name).compiled_check is None  # bytes, ndarrays, float32
+        assert REGISTRY.message(name).compiled_check is None  # bytes, ndarrays
 
 
 @pytest.mark.parametrize("name", COMPILED)
 def test_the_shortcut_gives_what_the_walk_gives_or_leaves_it_to_the_walk(name):
-    spec = REGISTRY.message(name)
+    _agree(REGISTRY.message(name), random.Random(name), 60)
+
+
+# Every kind of field a compiled type can have, several in forms the registry's types lack
+# (float32 and integer fixed arrays, bounded strings in bounded arrays, uint64 values).
+MIXED = {
+    "Inner.msg": "float32 x\nint16 y\nstring<=5 z\n",
+    "Mixed.msg": (
+        "float32[3] f32s\nfloat64[2] f64s\nint8[2] i8s\nuint64[2] u64s\nuint64 big\n"
+        "float32 one\nstring<=4 short\nstring<=3[2] words\nbool[<=2] flags\n"
+        "Inner[<=2] inners\nInner[2] pair\nInner[] many\nstd_msgs/Header header\n"
+        "builtin_interfaces/Duration span\n"
+    ),
+}
+
+
+# `normalize` casts a float32 array's 1e300 to inf, and numpy warns as it does.
+@pytest.mark.filterwarnings("ignore:overflow encountered in cast:RuntimeWarning")
+def test_types_with_every_kind_of_field_agree_too(tmp_path):
+    folder = tmp_path / "rbcheck_msgs" / "msg"
+    folder.mkdir(parents=True)
+    for file_name, text in MIXED.items():
+        (folder / file_name).write_text(text)
+    registry = TypeRegistry.with_defaults()
+    registry.add_directory(tmp_path)
+    for name in ("rbcheck_msgs/msg/Inner", "rbcheck_msgs/msg/Mixed"):
+        spec = registry.message(name)
+        assert spec.compiled_check is not None
+        _agree(spec, random.Random(name), 3000)
+
+
+def test_large_ints_in_a_float32_array_are_rounded_once(tmp_path):
+    """2**53 + 2**29 + 1 as float64 is a float32 midpoint: rounded twice it would go down;
+    the walk casts the int straight to float32 and goes up."""
+    folder = tmp_path / "rbcheck_msgs" / "msg"
+    folder.mkdir(parents=True)
+    (folder / "Floats.msg").write_text("float32[3] values\n")
+    registry = TypeRegistry.with_defaults()
+    registry.add_directory(tmp_path)
+    spec = registry.message("rbcheck_msgs/msg/Floats")
+    raw = {"values": [2**53 + 2**29 + 1, 0, 0]}
+    assert normalize(spec, raw, now_ns=0) == {"values": [float(2**53 + 2**30), 0.0, 0.0]}
+
+
+def _agree(spec: MessageSpec, rng: random.Random, rounds: int) -> None:
     check = spec.compiled_check
-    rng = random.Random(name)
     maker = Maker(rng)
     taken = 0
-    for round_ in range(60):
+    for round_ in range(rounds):
         raw = maker.message(spec)
         if round_ % 2:
             raw = _break(rng, raw)
@@ -174,7 +230,7 @@ def test_the_shortcut_gives_what_the_walk_gives_or_leaves_it_to_the_walk(name):
         assert expected != "refused", f"the shortcut accepted what the walk refuses: {raw!r}"
         assert _same(got, expected), f"{raw!r}: {got!r} != {expected!r}"
         assert _same(normalize(spec, raw, now_ns=NOW_NS), expected)
-    assert taken > 0  # the shortcut did take some
+    assert taken > 0, spec.name  # the shortcut did take some
 
 
 def test_forms_only_the_walk_knows_still_work():
@@ -196,6 +252,28 @@ def test_forms_only_the_walk_knows_still_work():
     assert big == {"data": 2**64 - 1}
     numpy_value = normalize(REGISTRY.message("std_msgs/msg/Int32"), {"data": np.int32(4)}, now_ns=0)
     assert _same(numpy_value, {"data": 4})
+
+
+def test_float32_values_are_rounded_and_range_checked_as_the_walk_does():
+    spec = REGISTRY.message("std_msgs/msg/Float32")
+    assert spec.compiled_check is not None
+    assert spec.compiled_check({"data": 0.1}) == {"data": 0.10000000149011612}
+    assert normalize(spec, {"data": 0.1}, now_ns=0) == {"data": 0.10000000149011612}
+    assert spec.compiled_check({"data": 1e39}) is None  # past float32: the walk refuses it
+    with pytest.raises(MessageValidationError, match="out of range for float32"):
+        normalize(spec, {"data": 1e39}, now_ns=0)
+    assert normalize(spec, {"data": math.inf}, now_ns=0) == {"data": math.inf}  # (CBOR's)
+    colors = REGISTRY.message("std_msgs/msg/ColorRGBA")
+    assert colors.compiled_check({"r": 1, "g": 0.3}) == {
+        "r": 1.0,
+        "g": 0.30000001192092896,
+        "b": 0.0,
+        "a": 0.0,
+    }
+    polygon = REGISTRY.message("geometry_msgs/msg/Polygon")
+    assert polygon.compiled_check({"points": [{"x": 0.1}, {"y": 0.2}]}) == normalize(
+        polygon, {"points": [{"x": 0.1}, {"y": 0.2}]}, now_ns=0
+    )
 
 
 def test_a_missing_header_is_all_zeros_and_a_missing_stamp_is_now():
