@@ -99,6 +99,23 @@ CPU 0.7-0.8 / 0.8-1.0 s per 10,000 relayed (relay 0.3); fan-out scan p50 1.15 / 
 1.00; service round trip p50 0.7 / 1.0 ms (relay 0.5), p95 1.2 / 1.5 ms, calls/s 0.71 / 0.55;
 idle RSS 62 / 71 MiB (PyJWT now imported with the first token; the relay 40 MiB).
 
+Fourth sitting of issue 21 (`--floor --compare <7f07e1d> --repeat 3 --interleave --seconds
+5`, every workload, load 0.7-1.8, the VM fast that hour: the relay moved 39,000-48,000 msg/s;
+this bridge / 7f07e1d as ratios to the bare relay of the same run): with small CBOR frames
+read by `cbor2.loads` and a per-topic frame head, and the compiled check of nested types
+(`schemas.compiled_check`), burst JSON 0.98x / 1.04x, burst CBOR 0.89x / 0.67x, sustained
+JSON 0.88x / 0.82x, sustained CBOR 0.81x / 0.73x, all lossless; CPU per 10,000 relayed
+209-271 ms against 211-307 ms (the relay 165-191 ms), CBOR 247-271 against 305-307 ms.
+Fan-out to 16: every scan delivered, scan p50 1.10x / 1.18x, IMU p99 0.24x / 0.38x. Service
+round trip p50 0.4 ms, p95 0.6 ms (relay 0.3 / 0.5). Idle 62 MiB, 0-0.5 % CPU. Three earlier
+sittings of the same session, at load 0.5-2.2 and the VM slower, put the small-message ratios
+of this code between 0.67x and 0.93x (medians over the four: burst JSON 0.83x, burst CBOR
+0.80x, sustained JSON 0.79x, sustained CBOR 0.83x). The bare relay on picows (`--picows`)
+moved 1.14-1.48x the websockets relay's rate at 91-133 ms CPU per 10,000: what a faster I/O
+layer alone wins; this bridge already reads and frames data frames itself (`bridge.frame_scan`,
+`bridge.link.frame_header`), so what remains is its own work per message (decode, check
+against the ROS type, route, encode), more than the websockets relay spends in all.
+
 The bare relay forwards the publisher's frame as it came and validates nothing: on one
 connection its scan and IMU figures are what the clients, the copies and the kernel cost here.
 """

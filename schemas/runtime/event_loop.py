@@ -3,11 +3,18 @@
 
 uvloop (libuv) runs the same asyncio code: websockets, TLS, timers and executors all work on
 it unchanged (every real client in tests/compat passed against a bridge on it, 2026-11-26).
-It is not the default because it did not win where this project is judged
-(`benchmarks/relay.py --uvloop`, the bridge on both loops in one run, 2026-11-26): it halved a
-service round trip's tail (p95 3.3 vs 8.6 ms, load 7-32) and moved small messages at the same
-rate, but a full CBOR scan fanned out to 16 subscribers arrived later than on asyncio's loop
-(scan p50 1.79x the bare relay's against 1.15x, load 5-11), the figure DESIGN §4 cares about.
+It is not the default because it does not win where this project is judged
+(`benchmarks/relay.py --uvloop`, the bridge on both loops in one run). First measured
+2026-11-26: it halved a service round trip's tail (p95 3.3 vs 8.6 ms, load 7-32) and moved
+small messages at the same rate, but a full CBOR scan fanned out to 16 subscribers arrived
+later than on asyncio's loop (scan p50 1.79x the bare relay's against 1.15x, load 5-11).
+Measured again after the bridge stopped going through websockets' per-frame machinery (issue
+21, three quiet sittings, medians of 3 interleaved runs, ratios to the bare relay, uvloop /
+asyncio): the fan-out no longer suffers (scan p50 0.97-1.03x against 0.88-1.06x, IMU p99
+0.30-0.33x against 0.28-0.36x), and small messages split both ways: burst JSON 0.82-0.97x
+against 0.78-0.83x, burst CBOR 0.63-0.95x against 0.68-0.84x, sustained JSON 0.79-0.82x
+against 0.69-0.85x, sustained CBOR 0.72-0.79x against 0.67-0.85x. No consistent win, so the
+standard loop stays the default and uvloop a choice.
 """
 
 from __future__ import annotations
