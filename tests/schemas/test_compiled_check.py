@@ -251,6 +251,12 @@ def test_forms_only_the_walk_knows_still_work():
     assert stamped == {"stamp": {"sec": 5, "nanosec": 6}, "frame_id": ""}
     big = normalize(REGISTRY.message("std_msgs/msg/UInt64"), {"data": 2**64 - 1}, now_ns=0)
     assert big == {"data": 2**64 - 1}
+    twist = REGISTRY.message("geometry_msgs/msg/Twist")
+    numpy_values = {"linear": {"x": np.float64(0.5), "y": np.float32(0.25), "z": np.int64(3)}}
+    assert twist.compiled_check(numpy_values) is None  # numpy scalars: the walk converts them
+    assert _same(
+        normalize(twist, numpy_values, now_ns=0)["linear"], {"x": 0.5, "y": 0.25, "z": 3.0}
+    )
     numpy_value = normalize(REGISTRY.message("std_msgs/msg/Int32"), {"data": np.int32(4)}, now_ns=0)
     assert _same(numpy_value, {"data": 4})
 
