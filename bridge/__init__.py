@@ -4,3 +4,7 @@ Entry points: `bridge.compose.run_bridge(BridgeConfig)` for programs and tests,
 `python -m bridge` (`bridge.cli.main`) for people; `bridge.core.BridgeCore` is the
 transport-free protocol core. See `bridge/README.md` for the module map.
 """
+
+from schemas.native import native_first
+
+__path__ = native_first(__path__, __name__)  # the compiled hot path, if built (schemas.native)

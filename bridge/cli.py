@@ -23,6 +23,7 @@ from bridge.compose import run_bridge
 from bridge.config import BridgeConfig
 from bridge.dds.cyclone_xml import CycloneSettings, cyclone_xml
 from bridge.errors import DdsStartError, ZenohStartError
+from schemas import native
 from schemas.bridge_config import GROUPS
 from schemas.options import add_options, config_values, invalid_options
 from schemas.runtime import event_loop
@@ -83,11 +84,12 @@ async def serve_until_signalled(config: BridgeConfig) -> None:
     try:
         async with run_bridge(config) as running:
             logger.info(
-                "listening on %s://%s:%d (event loop: %s)",
+                "listening on %s://%s:%d (event loop: %s, hot path: %s)",
                 scheme(config),
                 config.host,
                 running.port,
                 event_loop.running_loop_name(),
+                "compiled" if native.active_build() else "Python",
             )
             tune_process()
             freeze_startup_heap()

@@ -13,6 +13,8 @@ from dataclasses import dataclass
 from functools import cached_property
 from typing import Any
 
+from mypy_extensions import mypyc_attr
+
 from bridge.reduction import CloudReducer, ReduceRequest, Reduction, budget_for_link
 from schemas import codec_json
 from schemas.codec_cdr import to_cdr
@@ -188,6 +190,8 @@ class TopicMessage:
 
 
 # Not frozen, like `bridge.effects.Send`: one per message and subscriber; treat as immutable.
+# Compiled (`schemas.native`), it still takes a Python subclass: `FoxgloveDelivery`'s frame.
+@mypyc_attr(allow_interpreted_subclasses=True)
 @dataclass(slots=True)
 class Delivery:
     """A topic message for one client: its topic spelling, chosen encoding and, for a point

@@ -8,3 +8,7 @@
 - :mod:`schemas.ops`: every rosbridge op as a pydantic model; :mod:`schemas.errors`: the one
   exception tree.
 """
+
+from schemas.native import native_first
+
+__path__ = native_first(__path__, __name__)  # the compiled hot path, if built (schemas.native)

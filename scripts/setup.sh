@@ -6,6 +6,11 @@ cd "$(dirname "$0")/.."
 
 python3 -m pip install --quiet --disable-pip-version-check -e '.[all,test]'
 
+# The relay's hot path compiled with mypyc into build/native/ (schemas/native.py; ~3 min the
+# first time, nothing while the sources are unchanged). Without it the same modules run as
+# Python, slower: a failed build is reported and set-up goes on.
+python3 scripts/build_native.py || echo "setup: the compiled hot path was not built; the bridge runs its Python modules" >&2
+
 # Debian packages: Node.js for the roslibjs tests and the dashboard build, Chromium for the
 # dashboard's browser tests, docker-compose to validate and run docker-compose.yml, and the
 # Docker engine (docker.io: dockerd, which tests/launcher/test_compose_engine.py starts when

@@ -45,7 +45,9 @@ def allow_all(action: str, name: str) -> str | None:
     return None
 
 
-@dataclass(slots=True)  # (not frozen, as its base `Delivery`)
+# Not frozen, as its base `Delivery`; no slots of its own: they would hide the compiled base's
+# fields (`schemas.native`).
+@dataclass
 class FoxgloveDelivery(Delivery):
     """A topic message for one Foxglove subscription: MessageData around the shared CDR."""
 
