@@ -5,6 +5,8 @@ Entry points: `bridge.compose.run_bridge(BridgeConfig)` for programs and tests,
 transport-free protocol core. See `bridge/README.md` for the module map.
 """
 
-from schemas.native import native_first
+from schemas.runtime.native import native_first
 
-__path__ = native_first(__path__, __name__)  # the compiled hot path, if built (schemas.native)
+__path__ = native_first(
+    __path__, __name__
+)  # the compiled hot path, if built (schemas.runtime.native)

@@ -23,10 +23,9 @@ from bridge.compose import run_bridge
 from bridge.config import BridgeConfig
 from bridge.dds.cyclone_xml import CycloneSettings, cyclone_xml
 from bridge.errors import DdsStartError, ZenohStartError
-from schemas import native
 from schemas.bridge_config import GROUPS
 from schemas.options import add_options, config_values, invalid_options
-from schemas.runtime import event_loop
+from schemas.runtime import event_loop, native
 from schemas.runtime.process import freeze_startup_heap, tune_process
 
 logger = logging.getLogger("bridge.cli")

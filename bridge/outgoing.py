@@ -190,7 +190,7 @@ class TopicMessage:
 
 
 # Not frozen, like `bridge.effects.Send`: one per message and subscriber; treat as immutable.
-# Compiled (`schemas.native`), it still takes a Python subclass: `FoxgloveDelivery`'s frame.
+# Compiled (`schemas.runtime.native`), it still takes a Python subclass (`FoxgloveDelivery`).
 @mypyc_attr(allow_interpreted_subclasses=True)
 @dataclass(slots=True)
 class Delivery:

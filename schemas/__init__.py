@@ -9,6 +9,8 @@
   exception tree.
 """
 
-from schemas.native import native_first
+from schemas.runtime.native import native_first
 
-__path__ = native_first(__path__, __name__)  # the compiled hot path, if built (schemas.native)
+__path__ = native_first(
+    __path__, __name__
+)  # the compiled hot path, if built (schemas.runtime.native)

@@ -1,13 +1,13 @@
-"""Compile the relay's hot path (`schemas.native.MODULES`) with mypyc into build/native/.
+"""Compile the relay's hot path (`schemas.runtime.native.MODULES`) with mypyc into build/native/.
 
 Usage: python3 scripts/build_native.py [--force] [--check]
 
 Does nothing when the build already matches the sources and this interpreter. Otherwise mypyc
 type-checks and compiles the modules in a scratch directory (about two minutes on two cores)
-and the result replaces build/native/ whole, with a manifest of the source hashes it was made
-from; the packages pick it up on their next import (`schemas.native`). On any failure the old
-build is removed, so the Python sources run, and the exit status is 1. `--check` only says
-whether the build is current (exit 0) or not (exit 1, with the reason).
+and the result replaces build/native/ whole, with a manifest of the source hashes it was
+made from; the packages pick it up on their next import (`schemas.runtime.native`). On any
+failure the old build is removed, so the Python sources run, and the exit status is 1.
+`--check` only says whether the build is current (exit 0) or not (exit 1, with the reason).
 """
 
 from __future__ import annotations
@@ -25,7 +25,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 os.environ["RIVERBRIDGE_PURE"] = "1"  # (this process must not load the build it replaces)
 
-from schemas import native
+from schemas.runtime import native
 
 # Run in a child: setuptools' setup() exits the process on errors.
 _SETUP = """

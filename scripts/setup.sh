@@ -6,10 +6,13 @@ cd "$(dirname "$0")/.."
 
 python3 -m pip install --quiet --disable-pip-version-check -e '.[all,test]'
 
-# The relay's hot path compiled with mypyc into build/native/ (schemas/native.py; ~3 min the
-# first time, nothing while the sources are unchanged). Without it the same modules run as
-# Python, slower: a failed build is reported and set-up goes on.
-python3 scripts/build_native.py || echo "setup: the compiled hot path was not built; the bridge runs its Python modules" >&2
+# The relay's hot path compiled with mypyc into build/native/ (schemas/runtime/native.py; ~2 min
+# the first time, in the background while the rest installs; nothing while the sources are
+# unchanged). Without it the same modules run as Python, slower: a failed build is reported and
+# set-up goes on.
+native_log="$(mktemp)"
+python3 scripts/build_native.py >"$native_log" 2>&1 &
+native_build=$!
 
 # Debian packages: Node.js for the roslibjs tests and the dashboard build, Chromium for the
 # dashboard's browser tests, docker-compose to validate and run docker-compose.yml, and the
@@ -68,3 +71,11 @@ for distro in jazzy kilted; do
         | { grep -v "is ignored: it is neither a file nor a directory" || true; } >&2
     echo "$packages" > "$venv/.riverbridge-packages"
 done
+
+if ! wait "$native_build"; then
+    cat "$native_log" >&2
+    echo "setup: the compiled hot path was not built; the bridge runs its Python modules" >&2
+else
+    cat "$native_log"
+fi
+rm -f "$native_log"

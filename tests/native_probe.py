@@ -15,8 +15,9 @@ from bridge.config import BridgeConfig
 from bridge.core import BridgeCore
 from bridge.effects import Close, Send
 from bridge.outgoing import render
-from schemas import codec_cbor, codec_json, native
+from schemas import codec_cbor, codec_json
 from schemas.registry import TypeRegistry
+from schemas.runtime import native
 
 NOW = 1_700_000_000_000_000_000
 IMU = {

@@ -73,6 +73,11 @@ def _sources(*packages: str) -> Iterator[Path]:
         yield from sorted((ROOT / package).rglob("*.py"))
 
 
+# The one runtime import the message layer makes: the package's own `__init__` asks where its
+# modules load from (the compiled hot path, `schemas.runtime.native`), before any is imported.
+PACKAGE_HOOK = (Path("schemas/__init__.py"), "schemas.runtime.native")
+
+
 def test_the_message_layer_does_no_runtime_work() -> None:
     """schemas' message modules import no clock, socket, thread or process helpers."""
     offences = [
@@ -81,6 +86,7 @@ def test_the_message_layer_does_no_runtime_work() -> None:
         if "runtime" not in path.parts
         for module, _names, line in _imports(path)
         if any(module == banned or module.startswith(banned + ".") for banned in RUNTIME_ONLY)
+        and (path.relative_to(ROOT), module) != PACKAGE_HOOK
     ]
     assert not offences, "\n".join(offences)
 

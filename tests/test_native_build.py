@@ -1,4 +1,4 @@
-"""The compiled hot path (`schemas.native`): used when current, the same program as the
+"""The compiled hot path (`schemas.runtime.native`): used when current, the same program as the
 sources, and never used when it does not match them."""
 
 from __future__ import annotations
@@ -10,7 +10,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-from schemas import native
+from schemas.runtime import native
 
 ROOT = Path(__file__).resolve().parent.parent
 

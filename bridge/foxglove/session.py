@@ -46,7 +46,7 @@ def allow_all(action: str, name: str) -> str | None:
 
 
 # Not frozen, as its base `Delivery`; no slots of its own: they would hide the compiled base's
-# fields (`schemas.native`).
+# fields (`schemas.runtime.native`).
 @dataclass
 class FoxgloveDelivery(Delivery):
     """A topic message for one Foxglove subscription: MessageData around the shared CDR."""

@@ -16,11 +16,13 @@ from typing import Generic, Protocol, TypeVar
 
 from bridge.context import Context
 from bridge.session import ClientSession
-from schemas.native import native_first
 from schemas.ops import OpBase, op_name, validate_op
+from schemas.runtime.native import native_first
 from schemas.values import JsonValue
 
-__path__ = native_first(__path__, __name__)  # the compiled hot path, if built (schemas.native)
+__path__ = native_first(
+    __path__, __name__
+)  # the compiled hot path, if built (schemas.runtime.native)
 
 OpT = TypeVar("OpT")
 ModelT = TypeVar("ModelT", bound=OpBase)

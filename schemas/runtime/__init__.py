@@ -9,4 +9,6 @@ own that the message layer never imports (tests/test_architecture.py):
   start-up heap) and background priority for heavy worker threads.
 - :mod:`schemas.runtime.telemetry`: the process's own CPU and memory, its identity (name, pid,
   host) and the telemetry rhythm the bridge and the clients share.
+- :mod:`schemas.runtime.native`: whether the compiled hot path (mypyc, `build/native/`) runs
+  in place of the sources; the packages' `__init__` ask it, schemas' own included.
 """

@@ -52,7 +52,7 @@ MODULES: tuple[str, ...] = (
     "schemas.tracing",
 )
 
-ROOT = Path(__file__).resolve().parent.parent  # the directory holding the packages
+ROOT = Path(__file__).resolve().parents[2]  # the directory holding the packages
 BUILD_DIR = ROOT / "build" / "native"
 MANIFEST = "manifest.json"
 PURE_ENV = "RIVERBRIDGE_PURE"
