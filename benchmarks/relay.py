@@ -26,10 +26,11 @@ gives the relay's CPU milliseconds per 10,000 relayed messages (deliveries; a ca
 
 Usage: python -m benchmarks.relay [--only burst,sustained,scan,fanout,service]
        [--encodings json,cbor] [--repeat N [--interleave]] [--compare /work/main] [--uvloop]
-       [--floor] [--picows] [--url ws://host:port] [-- bridge options...]
+       [--pure] [--floor] [--picows] [--url ws://host:port] [-- bridge options...]
 With --compare (another checkout's bridge), --uvloop (this bridge on uvloop instead of the
-standard loop) or --floor (a bare websockets relay that forwards frames unvalidated), the
-relays run in turn and the medians are printed side by side with their ratios to the floor.
+standard loop), --pure (this bridge on its Python sources, not the compiled hot path) or
+--floor (a bare websockets relay that forwards frames unvalidated), the relays run in turn and
+the medians are printed side by side with their ratios to the floor.
 
 Measured here, quiet (`--compare <checkout> --floor --repeat 3`, load 0.02-2.3 from the
 benchmark itself; two sittings, medians of 3 interleaved runs each; "before" = the bridge
@@ -141,6 +142,7 @@ import numpy as np
 
 from benchmarks.picows_floor import run_picows_floor
 from benchmarks.relay_roles import FANOUT, SUBSCRIBER_PROCESSES, TOPICS, cpu_s, run_role
+from schemas.runtime import native
 from schemas.runtime.event_loop import EVENT_LOOP_ENV
 from schemas.runtime.process import MALLOC_ENV as TUNED_MALLOC
 
@@ -237,11 +239,13 @@ def merge_seen(
 
 
 def start_bridge(
-    extra: list[str], root: str | None, loop: str | None = None
+    extra: list[str], root: str | None, loop: str | None = None, pure: bool = False
 ) -> tuple[subprocess.Popen[str], str]:
     env = {**os.environ, **TUNED_MALLOC}
     if loop is not None:
         env[EVENT_LOOP_ENV] = loop
+    if pure:  # the Python sources, not the compiled hot path (schemas.runtime.native)
+        env[native.PURE_ENV] = "1"
     if root is not None:  # another checkout's bridge (e.g. main, for a before/after)
         root = os.path.abspath(root)
         env["PYTHONPATH"] = root
@@ -329,6 +333,9 @@ def start_targets(args: argparse.Namespace) -> list[Target]:
     if args.uvloop:  # this checkout's bridge on uvloop instead of the standard loop
         process, url = start_bridge(args.bridge_args, None, "uvloop")
         targets.append(Target("uvloop", url, process.pid, process.terminate))
+    if args.pure:  # this checkout's bridge on its Python sources, not the compiled hot path
+        process, url = start_bridge(args.bridge_args, None, pure=True)
+        targets.append(Target("pure", url, process.pid, process.terminate))
     if args.compare:
         process, url = start_bridge(args.bridge_args, args.compare)
         targets.append(
@@ -456,6 +463,12 @@ def main(argv: list[str] | None = None) -> int:
         "--uvloop",
         action="store_true",
         help=f"also run this bridge on uvloop ({EVENT_LOOP_ENV}=uvloop)",
+    )
+    parser.add_argument(
+        "--pure",
+        action="store_true",
+        help=f"also run this bridge on its Python sources ({native.PURE_ENV}=1), "
+        "beside the compiled hot path (scripts/build_native.py)",
     )
     parser.add_argument(
         "--floor",
