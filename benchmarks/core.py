@@ -15,6 +15,10 @@ Issue 21 (min of 3 interleaved runs, load ~1, the VM slower that day): with `Sen
 and `WireFrame` no longer frozen and `fragment_size_for` without lists, 1 subscriber JSON 14.2
 -> 12.0, CBOR 16.1 -> 14.0; 10 subscribers 35.0 -> 23.5 and 38.5 -> 24.8.
 
+Compiled by mypyc (`schemas.runtime.native`) against `RIVERBRIDGE_PURE=1` (issue 21, noisy VM,
+best of runs, µs per frame, 1 subscriber): String JSON 10.2-12.0 / 13.9-18.6, CBOR 7.6-9.8 /
+11.1-17.8; Imu JSON 11.7 / 16.2, CBOR 18.8 / 23.1.
+
 With `--roles` the bridge has a roles file (`bridge.roles`): the same frames, each checked by
 the policy (allow-list, token buckets, per-principal counters) before it takes effect.
 
