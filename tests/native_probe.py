@@ -45,6 +45,7 @@ def script() -> list[tuple[str, object]]:
         ("raw", {"op": "subscribe", "topic": "/chatter", "fragment_size": 40}),
         ("pub", {"op": "publish", "topic": "/chatter", "msg": {"data": "hello"}}),
         ("pub", codec_cbor.dumps({"op": "publish", "topic": "/chatter", "msg": {"data": "é"}})),
+        ("pub", {"op": "publish", "topic": "/chatter", "msg": {"data": "long " * 600}}),
         ("pub", {"op": "publish", "topic": "/imu", "msg": IMU}),
         ("pub", codec_cbor.dumps({"op": "publish", "topic": "/imu", "msg": IMU})),
         ("pub", {"op": "publish", "topic": "/imu", "msg": {**IMU, "orientation": 3}}),
