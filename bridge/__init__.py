@@ -7,6 +7,5 @@ transport-free protocol core. See `bridge/README.md` for the module map.
 
 from schemas.runtime.native import native_first
 
-__path__ = native_first(
-    __path__, __name__
-)  # the compiled hot path, if built (schemas.runtime.native)
+# The compiled hot path, if built and current (schemas.runtime.native).
+__path__ = native_first(__path__, __name__)

@@ -11,6 +11,5 @@
 
 from schemas.runtime.native import native_first
 
-__path__ = native_first(
-    __path__, __name__
-)  # the compiled hot path, if built (schemas.runtime.native)
+# The compiled hot path, if built and current (schemas.runtime.native).
+__path__ = native_first(__path__, __name__)

@@ -20,9 +20,8 @@ from schemas.ops import OpBase, op_name, validate_op
 from schemas.runtime.native import native_first
 from schemas.values import JsonValue
 
-__path__ = native_first(
-    __path__, __name__
-)  # the compiled hot path, if built (schemas.runtime.native)
+# The compiled hot path, if built and current (schemas.runtime.native).
+__path__ = native_first(__path__, __name__)
 
 OpT = TypeVar("OpT")
 ModelT = TypeVar("ModelT", bound=OpBase)
